@@ -1,0 +1,193 @@
+//! From a measured pulse `(F_max, t_c)` to a verdict against the scene's class envelopes.
+
+use crate::envelope::{Inverted, Side};
+use crate::math;
+use crate::scene::Scene;
+
+/// A pulse the detector measured: peak contact force and contact duration, with their
+/// standard deviations in log units (from the noise and the sampling).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Measurement {
+    /// Peak contact force in N.
+    pub peak_force_n: f32,
+    /// Contact duration in s.
+    pub duration_s: f32,
+    /// Standard deviation of `ln F_max`.
+    pub sigma_ln_force: f32,
+    /// Standard deviation of `ln t_c`.
+    pub sigma_ln_duration: f32,
+}
+
+/// Why a pulse got no class at all.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RejectReason {
+    /// A sample reached the ADC's full scale: the peak is clipped.
+    Saturated,
+    /// One sample stands alone above the threshold (EMI spike, not an impact).
+    Spike,
+    /// Two impacts overlap (more than one peak in one pulse).
+    PileUp,
+    /// Longer than any class allows (or the sensor is stuck above the threshold).
+    TooLong,
+    /// The stream ended in the middle of the pulse.
+    Truncated,
+    /// Samples were lost during the pulse.
+    Gap,
+    /// The measurement is not a finite positive force and duration.
+    Implausible,
+}
+
+impl RejectReason {
+    /// Every reason, in the order [`crate::counters::Counters`] stores them.
+    pub const ALL: [RejectReason; 7] = [
+        RejectReason::Saturated,
+        RejectReason::Spike,
+        RejectReason::PileUp,
+        RejectReason::TooLong,
+        RejectReason::Truncated,
+        RejectReason::Gap,
+        RejectReason::Implausible,
+    ];
+
+    /// Index into [`Self::ALL`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Short lower-case name for logs and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            RejectReason::Saturated => "saturated",
+            RejectReason::Spike => "spike",
+            RejectReason::PileUp => "pileup",
+            RejectReason::TooLong => "too_long",
+            RejectReason::Truncated => "truncated",
+            RejectReason::Gap => "gap",
+            RejectReason::Implausible => "implausible",
+        }
+    }
+}
+
+/// The verdict on one pulse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Verdict {
+    /// The class with posterior at least the scene's confidence.
+    Class {
+        /// Index into [`Scene::classes`].
+        class: u8,
+        /// Posterior probability of that class.
+        posterior: f32,
+    },
+    /// Inside the overlap of two or more envelopes: no class reaches the confidence.
+    Ambiguous {
+        /// The most probable class (the forced choice).
+        best: u8,
+        /// Its posterior.
+        posterior: f32,
+    },
+    /// Further than the scene's `out_sigmas` outside every envelope.
+    OutOfEnvelope {
+        /// The class whose envelope is nearest.
+        nearest: u8,
+        /// The radius that class would need, against its range.
+        radius: Side,
+        /// The speed that class would need, against its range.
+        speed: Side,
+    },
+    /// No class: the pulse is not a clean single impact.
+    Rejected(RejectReason),
+}
+
+impl Verdict {
+    /// The forced choice: the class of `Class`, the best of `Ambiguous`, the nearest of
+    /// `OutOfEnvelope`; `None` when rejected.
+    pub fn forced_choice(&self) -> Option<u8> {
+        match *self {
+            Verdict::Class { class, .. } => Some(class),
+            Verdict::Ambiguous { best, .. } => Some(best),
+            Verdict::OutOfEnvelope { nearest, .. } => Some(nearest),
+            Verdict::Rejected(_) => None,
+        }
+    }
+}
+
+impl<const N: usize> Scene<N> {
+    /// Classifies a measured pulse.
+    ///
+    /// The noise of `ln F_max` and `ln t_c` is the measurement's own combined in quadrature with
+    /// the scene's `model_sigma`. If the pulse is more than `out_sigmas` outside every envelope
+    /// it is `OutOfEnvelope` (with the nearest class); otherwise the posterior of class `c` is
+    /// `prior_c L_c / sum_j prior_j L_j` with `L` from [`crate::envelope::Envelope::ln_likelihood`],
+    /// and the best class is reported as `Class` when its posterior reaches `confidence`, else
+    /// `Ambiguous`. Never panics: a non-finite or non-positive measurement is
+    /// `Rejected(Implausible)`.
+    pub fn classify(&self, m: &Measurement) -> Verdict {
+        let ok = |v: f32| v.is_finite() && v > 0.0;
+        if !ok(m.peak_force_n) || !ok(m.duration_s) {
+            return Verdict::Rejected(RejectReason::Implausible);
+        }
+        let s = self.settings();
+        let model2 = s.model_sigma * s.model_sigma;
+        let finite_or = |v: f32| if v.is_finite() { v } else { 0.0 };
+        let (a, b) = (finite_or(m.sigma_ln_force), finite_or(m.sigma_ln_duration));
+        let sf = math::sqrt(a * a + model2);
+        let st = math::sqrt(b * b + model2);
+        let lf = math::ln(m.peak_force_n);
+        let lt = math::ln(m.duration_s);
+
+        let mut nearest = 0u8;
+        let mut nearest_d = f32::INFINITY;
+        let mut best = 0u8;
+        let mut best_ll = f32::NEG_INFINITY;
+        let mut lls = [f32::NEG_INFINITY; crate::scene::MAX_CLASSES];
+        for (i, ((env, lp), slot)) in self
+            .envelopes()
+            .iter()
+            .zip(self.ln_priors())
+            .zip(lls.iter_mut())
+            .enumerate()
+        {
+            let d = env.outside_sigmas(lf, lt, sf, st);
+            if d < nearest_d {
+                nearest_d = d;
+                nearest = i as u8;
+            }
+            let ll = env.ln_likelihood(lf, lt, sf, st) + lp;
+            *slot = ll;
+            if ll > best_ll {
+                best_ll = ll;
+                best = i as u8;
+            }
+        }
+        if nearest_d > s.out_sigmas || best_ll == f32::NEG_INFINITY || !best_ll.is_finite() {
+            let inv = self.invert(nearest, m);
+            return Verdict::OutOfEnvelope {
+                nearest,
+                radius: inv.map_or(Side::Inside, |v| v.radius_side),
+                speed: inv.map_or(Side::Inside, |v| v.speed_side),
+            };
+        }
+        // Posterior of the best class by log-sum-exp.
+        let n = self.envelopes().len();
+        let sum: f32 = lls.iter().take(n).map(|&ll| math::exp(ll - best_ll)).sum();
+        let posterior = 1.0 / sum;
+        if posterior >= s.confidence {
+            Verdict::Class {
+                class: best,
+                posterior,
+            }
+        } else {
+            Verdict::Ambiguous { best, posterior }
+        }
+    }
+
+    /// The radius and speed class `class` would need for the measured pulse.
+    pub fn invert(&self, class: u8, m: &Measurement) -> Option<Inverted> {
+        self.envelopes()
+            .get(class as usize)
+            .map(|e| e.invert(m.peak_force_n, m.duration_s))
+    }
+}

@@ -1,0 +1,416 @@
+//! Streaming pulse detector: cuts impact pulses out of integer ADC samples and measures each
+//! one's peak force and contact duration with the Hertz pulse shape.
+//!
+//! Memory is fixed and independent of the sample rate: a pulse is never stored, only summed.
+//!
+//! - Baseline: exponential moving average of quiet samples, time constant `baseline_tau_s`.
+//! - Trigger: a sample above `baseline + max(trigger_sigmas * noise, 2)` counts starts a
+//!   pulse, which takes along the [`PRE_TRIGGER`] samples before it; the pulse ends after
+//!   `hold` samples below `baseline + max(release_sigmas * noise, 1)`.
+//! - Duration from the area: the Hertz pulse is `F(t) = F_max sin^(3/2)(pi t / t_c)` (within
+//!   2.4 % of `F_max`), whose area is `C_AREA F_max t_c` with
+//!   `C_AREA = Gamma(5/4) / (sqrt(pi) Gamma(7/4)) = 0.55641789`, so
+//!   `t_c = area / (C_AREA F_max)`: unbiased by amplitude, unlike a threshold width.
+//! - Peak between samples: `z = F^(2/3) = F_max^(2/3) sin(pi t / t_c)` is an exact sinusoid of
+//!   known frequency once `t_c` is known, so the maximum sample `z0` and its larger neighbour
+//!   `z1` give the offset `theta` of the true peak, `tan theta = (z1/z0 - cos D) / sin D`
+//!   (`D = pi dt / t_c`), and `F_max = (z0 / cos theta)^(3/2)` with `|theta| <= D/2`. Below
+//!   `D = 0.3` (more than ~10 samples per pulse) a parabola through three `z` samples is used.
+//!   `F_max` and `t_c` are iterated three times.
+
+use heapless::HistoryBuf;
+
+use crate::classifier::{Measurement, RejectReason};
+use crate::math;
+use crate::scene::Scene;
+
+/// Samples kept before the trigger and added to the pulse.
+pub const PRE_TRIGGER: usize = 32;
+
+/// `C_AREA = integral_0^1 sin^(3/2)(pi x) dx = Gamma(5/4) / (sqrt(pi) Gamma(7/4))`.
+pub const C_AREA: f32 = 0.556_417_9;
+
+/// What the detector reports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Detection {
+    /// A pulse ended: its measurement, or why it cannot be measured.
+    Pulse {
+        /// Index (from 0, counting every sample fed) of the pulse's largest sample.
+        at_sample: u64,
+        /// The measured pulse or the reason it was rejected.
+        outcome: Result<Measurement, RejectReason>,
+    },
+    /// The sensor output has not changed for `stuck_samples` samples although the scene says
+    /// it is noisy: reported once per stuck run.
+    Stuck {
+        /// Index of the sample that completed the run.
+        at_sample: u64,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum State {
+    /// Waiting for a trigger.
+    Idle,
+    /// Inside a pulse.
+    Active,
+    /// After a pulse that ran too long: waiting for the signal to come back down.
+    Recovering,
+}
+
+/// Running sums of the pulse being cut.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+struct Pulse {
+    samples: u32,
+    sum: f32,
+    max: f32,
+    max_at: u64,
+    before_max: f32,
+    after_max: f32,
+    after_known: bool,
+    last: f32,
+    valley: f32,
+    above_trigger: u32,
+    below_release: u16,
+    pileup: bool,
+    saturated: bool,
+}
+
+impl Pulse {
+    const EMPTY: Pulse = Pulse {
+        samples: 0,
+        sum: 0.0,
+        max: f32::NEG_INFINITY,
+        max_at: 0,
+        before_max: 0.0,
+        after_max: 0.0,
+        after_known: false,
+        last: 0.0,
+        valley: 0.0,
+        above_trigger: 0,
+        below_release: 0,
+        pileup: false,
+        saturated: false,
+    };
+}
+
+/// The streaming detector. Build it from a scene with [`Detector::new`].
+#[derive(Debug, Clone)]
+pub struct Detector {
+    trigger: f32,
+    release: f32,
+    noise: f32,
+    hold: u16,
+    max_samples: u32,
+    alpha: f32,
+    stuck_limit: u16,
+    adc_min: i32,
+    adc_max: i32,
+    dt_s: f32,
+    force_per_count_n: f32,
+    baseline: f32,
+    primed: bool,
+    previous: i32,
+    same_run: u16,
+    pre: HistoryBuf<i32, PRE_TRIGGER>,
+    state: State,
+    pulse: Pulse,
+    next_index: u64,
+}
+
+impl Detector {
+    /// A detector for the scene's sensor chain and settings.
+    ///
+    /// `hold = max(hold_samples, 0.05 t_c,min fs)`; a pulse longer than
+    /// `3 t_c,max fs + PRE_TRIGGER + hold` samples is rejected as `TooLong`; the baseline
+    /// weight per sample is `alpha = 1 - exp(-1 / (tau fs))`.
+    pub fn new<const N: usize>(scene: &Scene<N>) -> Self {
+        let sensor = scene.sensor();
+        let s = scene.settings();
+        let fs = sensor.sample_rate_hz;
+        let (short, long) = scene.duration_bounds_s();
+        let hold = (0.05 * short * fs).max(s.hold_samples as f32).min(u16::MAX as f32) as u16;
+        let max_samples = (3.0 * long * fs + PRE_TRIGGER as f32 + hold as f32)
+            .min(u32::MAX as f32 / 2.0) as u32;
+        let noise = sensor.noise_rms_counts;
+        Self {
+            trigger: (s.trigger_sigmas * noise).max(2.0),
+            release: (s.release_sigmas * noise).max(1.0),
+            noise,
+            hold,
+            max_samples,
+            alpha: 1.0 - math::exp(-1.0 / (s.baseline_tau_s * fs)),
+            stuck_limit: if noise >= 1.0 { s.stuck_samples } else { 0 },
+            adc_min: sensor.adc_min,
+            adc_max: sensor.adc_max,
+            dt_s: 1.0 / fs,
+            force_per_count_n: sensor.force_per_count_n,
+            baseline: 0.0,
+            primed: false,
+            previous: 0,
+            same_run: 0,
+            pre: HistoryBuf::new(),
+            state: State::Idle,
+            pulse: Pulse::EMPTY,
+            next_index: 0,
+        }
+    }
+
+    /// Number of samples fed so far.
+    pub fn samples_fed(&self) -> u64 {
+        self.next_index
+    }
+
+    /// The current baseline estimate in counts.
+    pub fn baseline(&self) -> f32 {
+        self.baseline
+    }
+
+    /// `true` while a pulse is being cut.
+    pub fn in_pulse(&self) -> bool {
+        self.state == State::Active
+    }
+
+    /// Feeds one sample; returns a detection when a pulse ends or the sensor is found stuck.
+    ///
+    /// `O(1)` work and memory per sample.
+    #[inline]
+    pub fn feed(&mut self, sample: i32) -> Option<Detection> {
+        let index = self.next_index;
+        self.next_index = index.wrapping_add(1);
+        if !self.primed {
+            self.primed = true;
+            self.baseline = sample as f32;
+            self.previous = sample.wrapping_add(1);
+        }
+        let stuck = self.track_stuck(sample, index);
+        let out = match self.state {
+            State::Idle => self.idle(sample, index),
+            State::Active => self.active(sample, index),
+            State::Recovering => {
+                self.track_baseline(sample);
+                if (sample as f32 - self.baseline) <= self.release {
+                    self.pulse.below_release = self.pulse.below_release.saturating_add(1);
+                    if self.pulse.below_release >= self.hold {
+                        self.state = State::Idle;
+                    }
+                } else {
+                    self.pulse.below_release = 0;
+                }
+                None
+            }
+        };
+        out.or(stuck)
+    }
+
+    /// Tells the detector that `lost` samples were dropped (e.g. a FIFO overrun). A pulse in
+    /// progress is rejected as `Gap`; the sample index advances by `lost`.
+    pub fn gap(&mut self, lost: u32) -> Option<Detection> {
+        self.next_index = self.next_index.wrapping_add(lost as u64);
+        self.pre.clear();
+        match self.state {
+            State::Active => {
+                self.state = State::Idle;
+                Some(self.reject(RejectReason::Gap))
+            }
+            _ => None,
+        }
+    }
+
+    /// Ends the stream: a pulse in progress is rejected as `Truncated`.
+    pub fn finish(&mut self) -> Option<Detection> {
+        match self.state {
+            State::Active => {
+                self.state = State::Idle;
+                Some(self.reject(RejectReason::Truncated))
+            }
+            _ => None,
+        }
+    }
+
+    fn track_stuck(&mut self, sample: i32, index: u64) -> Option<Detection> {
+        if sample != self.previous {
+            self.previous = sample;
+            self.same_run = 0;
+            return None;
+        }
+        self.same_run = self.same_run.saturating_add(1);
+        if self.stuck_limit != 0 && self.same_run == self.stuck_limit {
+            return Some(Detection::Stuck { at_sample: index });
+        }
+        None
+    }
+
+    fn track_baseline(&mut self, sample: i32) {
+        self.baseline += (sample as f32 - self.baseline) * self.alpha;
+    }
+
+    #[inline]
+    fn idle(&mut self, sample: i32, index: u64) -> Option<Detection> {
+        let v = sample as f32 - self.baseline;
+        if v <= self.trigger && sample < self.adc_max {
+            self.track_baseline(sample);
+            self.pre.write(sample);
+            return None;
+        }
+        // Trigger: start the pulse with the pre-trigger samples.
+        let mut p = Pulse::EMPTY;
+        for &s in self.pre.oldest_ordered() {
+            let w = s as f32 - self.baseline;
+            p.samples += 1;
+            p.sum += w;
+            p.last = w;
+        }
+        self.pre.clear();
+        self.pulse = p;
+        self.state = State::Active;
+        self.active(sample, index)
+    }
+
+    fn active(&mut self, sample: i32, index: u64) -> Option<Detection> {
+        let v = sample as f32 - self.baseline;
+        let p = &mut self.pulse;
+        p.samples = p.samples.saturating_add(1);
+        p.sum += v;
+        if sample >= self.adc_max || sample <= self.adc_min {
+            p.saturated = true;
+        }
+        if v > self.trigger {
+            p.above_trigger = p.above_trigger.saturating_add(1);
+        }
+        if v > p.max {
+            // A rise from a deep valley after an earlier peak is a second impact.
+            if p.max > 0.0 && second_peak(p.max, p.valley, v, self.trigger) {
+                p.pileup = true;
+            }
+            p.max = v;
+            p.max_at = index;
+            p.before_max = p.last;
+            p.after_known = false;
+            p.valley = v;
+        } else {
+            if !p.after_known {
+                p.after_max = v;
+                p.after_known = true;
+            }
+            if v < p.valley {
+                p.valley = v;
+            } else if second_peak(p.max, p.valley, v, self.trigger) {
+                p.pileup = true;
+            }
+        }
+        p.last = v;
+        if v <= self.release {
+            p.below_release = p.below_release.saturating_add(1);
+        } else {
+            p.below_release = 0;
+        }
+        if p.below_release >= self.hold {
+            self.state = State::Idle;
+            return Some(self.measure());
+        }
+        if p.samples > self.max_samples {
+            self.state = State::Recovering;
+            self.pulse.below_release = 0;
+            return Some(self.reject(RejectReason::TooLong));
+        }
+        None
+    }
+
+    fn reject(&self, reason: RejectReason) -> Detection {
+        Detection::Pulse {
+            at_sample: self.pulse.max_at,
+            outcome: Err(reason),
+        }
+    }
+
+    /// Peak and duration of the finished pulse (see the module docs for the method).
+    fn measure(&self) -> Detection {
+        let p = &self.pulse;
+        let at_sample = p.max_at;
+        let reject = |r| Detection::Pulse {
+            at_sample,
+            outcome: Err(r),
+        };
+        if p.saturated {
+            return reject(RejectReason::Saturated);
+        }
+        let neighbour = if p.after_known {
+            p.before_max.max(p.after_max)
+        } else {
+            p.before_max
+        };
+        if p.above_trigger <= 1 && neighbour < 0.2 * p.max {
+            return reject(RejectReason::Spike);
+        }
+        if p.pileup {
+            return reject(RejectReason::PileUp);
+        }
+        let (peak, duration) = match shape_fit(p.max, p.before_max, p.after_max, p.sum) {
+            Some(v) => v,
+            None => return reject(RejectReason::Implausible),
+        };
+        let n = p.samples as f32;
+        let sigma_ln_force = self.noise / peak;
+        let sigma_area = self.noise * math::sqrt(n) / p.sum;
+        let sigma_ln_duration = math::sqrt(sigma_area * sigma_area + sigma_ln_force * sigma_ln_force);
+        Detection::Pulse {
+            at_sample,
+            outcome: Ok(Measurement {
+                peak_force_n: peak * self.force_per_count_n,
+                duration_s: duration * self.dt_s,
+                sigma_ln_force,
+                sigma_ln_duration,
+            }),
+        }
+    }
+}
+
+/// A rise to `v` from a valley below `0.75 max` after the peak `max`, by more than
+/// `max(0.25 max, trigger)` and to above the trigger level: the start of a second impact.
+#[inline]
+fn second_peak(max: f32, valley: f32, v: f32, trigger: f32) -> bool {
+    v > trigger && valley < 0.75 * max && v - valley > (0.25 * max).max(trigger)
+}
+
+/// Peak (counts) and duration (samples) of a sampled Hertz pulse from its largest sample
+/// `y0`, the samples before and after it and the sum of all its samples; `None` when they are
+/// not a positive pulse.
+pub fn shape_fit(y0: f32, before: f32, after: f32, sum: f32) -> Option<(f32, f32)> {
+    if !(y0 > 0.0 && sum > 0.0 && y0.is_finite() && sum.is_finite()) {
+        return None;
+    }
+    let z = |y: f32| if y > 0.0 { math::powf(y, 2.0 / 3.0) } else { 0.0 };
+    let (z0, za, zb) = (z(y0), z(before.min(y0)), z(after.min(y0)));
+    let mut peak = y0;
+    let mut duration = sum / (C_AREA * peak);
+    for _ in 0..3 {
+        let d = core::f32::consts::PI / duration;
+        let half = 0.5 * d.min(core::f32::consts::FRAC_PI_2);
+        let b_max = z0 / math::cos(half);
+        let b = if d >= 0.3 {
+            let (s, c) = (math::sin(d), math::cos(d));
+            let r = za.max(zb) / z0;
+            let t = ((r - c) / s).clamp(0.0, math::sin(half) / math::cos(half));
+            z0 * math::sqrt(1.0 + t * t)
+        } else {
+            let curv = za - 2.0 * z0 + zb;
+            if curv < 0.0 {
+                let off = (za - zb) / (2.0 * curv);
+                z0 - 0.25 * (za - zb) * off
+            } else {
+                z0
+            }
+        };
+        peak = math::pow_3_2(b.clamp(z0, b_max));
+        duration = sum / (C_AREA * peak);
+    }
+    if peak.is_finite() && duration.is_finite() && duration > 0.0 {
+        Some((peak, duration))
+    } else {
+        None
+    }
+}

@@ -1,0 +1,277 @@
+//! The Hertz envelope of one particle class: an exact parallelogram in log space.
+//!
+//! From [`crate::hertz`], `F_max = c_F R^2 u^(6/5)` and `t_c = c_t R u^(-1/5)` with
+//! `c_F = 4/3 E*^(2/5) (5 pi rho / 4)^(3/5)` and `c_t = 2.9432752 (5 pi rho / (4 E*))^(2/5)`.
+//! In `x = ln R`, `y = ln u`, `(ln F_max, ln t_c) = (ln c_F + 2x + 6y/5, ln c_t + x - y/5)`:
+//! a linear map with determinant `-8/5`. A class with `R` in `[R0, R1]` and `u` in `[u0, u1]`
+//! therefore fills an exact parallelogram, and every observed `(F_max, t_c)` inverts exactly to
+//! the `(R, u)` the class would need:
+//! `y = (ln F - ln c_F - 2 (ln t - ln c_t)) / (8/5)`, `x = ln t - ln c_t + y/5`.
+//!
+//! Priors: `R` log-uniform on `[R0, R1]`; `u` with density `p(u) ~ u^(beta - 1)` on `[u0, u1]`
+//! (`beta = 1`: uniform speed; `beta = 2`: uniform drop height, `u = sqrt(2 g h)`).
+
+use crate::error::{Error, positive, representable};
+use crate::hertz::CONTACT_TIME_FACTOR;
+use crate::math;
+
+/// `|det|` of the map `(ln R, ln u) -> (ln F_max, ln t_c)`.
+pub const JACOBIAN: f32 = 1.6;
+
+/// Smallest standard deviation (in log units) the likelihood uses, so it stays finite.
+const MIN_SIGMA: f32 = 1e-4;
+
+/// A closed interval `[min, max]` with `min < max`, both finite and `> 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Range {
+    /// Lower end.
+    pub min: f32,
+    /// Upper end.
+    pub max: f32,
+}
+
+impl Range {
+    /// `[min, max]`; checked where it is used ([`Range::checked`]).
+    pub const fn new(min: f32, max: f32) -> Self {
+        Self { min, max }
+    }
+
+    /// Checks that both ends are finite, `> 0` and `min < max`.
+    pub fn checked(self, what: &'static str) -> Result<Self, Error> {
+        positive(self.min, what)?;
+        positive(self.max, what)?;
+        if self.min >= self.max {
+            return Err(Error::InvertedRange(what));
+        }
+        Ok(self)
+    }
+}
+
+/// Which way an observation lies outside an envelope, in terms of the radius or speed the class
+/// would need to produce it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Side {
+    /// Below the class's range.
+    Below,
+    /// Inside the class's range.
+    Inside,
+    /// Above the class's range.
+    Above,
+}
+
+/// The envelope of one class in `(ln F_max, ln t_c)`, with its prior density.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Envelope {
+    /// `ln c_F` (c_F in N m^-2 (m/s)^(-6/5)).
+    pub ln_force_coeff: f32,
+    /// `ln c_t` (c_t in s m^-1 (m/s)^(1/5)).
+    pub ln_duration_coeff: f32,
+    /// `[ln R0, ln R1]`, R in m.
+    pub ln_radius: (f32, f32),
+    /// `[ln u0, ln u1]`, u in m/s.
+    pub ln_speed: (f32, f32),
+    /// Speed prior exponent `beta`: `p(ln u) ~ e^(beta ln u)`.
+    pub speed_beta: f32,
+}
+
+/// Where an observation maps in a class's `(ln R, ln u)` plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Inverted {
+    /// Radius in m the class would need.
+    pub radius_m: f32,
+    /// Speed in m/s the class would need.
+    pub speed_m_s: f32,
+    /// Where that radius lies against the class's range.
+    pub radius_side: Side,
+    /// Where that speed lies against the class's range.
+    pub speed_side: Side,
+}
+
+impl Envelope {
+    /// The envelope of a sphere material (`density_kg_m3`, effective modulus against the plate
+    /// `effective_modulus_pa`) with radius in `radius_m` and speed in `speed_m_s`.
+    ///
+    /// `ln c_F = ln(4/3) + (2/5) ln E* + (3/5) ln(5 pi rho / 4)`,
+    /// `ln c_t = ln 2.9432752 + (2/5) (ln(5 pi rho / 4) - ln E*)`.
+    pub fn new(
+        effective_modulus_pa: f32,
+        density_kg_m3: f32,
+        radius_m: Range,
+        speed_m_s: Range,
+        speed_beta: f32,
+    ) -> Result<Self, Error> {
+        let e = positive(effective_modulus_pa, "effective_modulus_pa")?;
+        let rho = positive(density_kg_m3, "density_kg_m3")?;
+        let r = radius_m.checked("radius_m")?;
+        let u = speed_m_s.checked("speed_m_s")?;
+        let ln_e = math::ln(e);
+        let ln_rho = math::ln(5.0 * core::f32::consts::PI / 4.0 * rho);
+        let env = Self {
+            ln_force_coeff: math::ln(4.0 / 3.0) + 0.4 * ln_e + 0.6 * ln_rho,
+            ln_duration_coeff: math::ln(CONTACT_TIME_FACTOR) + 0.4 * (ln_rho - ln_e),
+            ln_radius: (math::ln(r.min), math::ln(r.max)),
+            ln_speed: (math::ln(u.min), math::ln(u.max)),
+            speed_beta,
+        };
+        // Every corner must give a peak force and duration that f32 carries.
+        for (x, y) in env.corners() {
+            let (lf, lt) = env.forward(x, y);
+            representable(math::exp(lf), "peak force")?;
+            representable(math::exp(lt), "contact duration")?;
+        }
+        Ok(env)
+    }
+
+    /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s.
+    pub fn forward(&self, x: f32, y: f32) -> (f32, f32) {
+        (
+            self.ln_force_coeff + 2.0 * x + 1.2 * y,
+            self.ln_duration_coeff + x - 0.2 * y,
+        )
+    }
+
+    /// `(ln R, ln u)` that gives `(ln F_max, ln t_c)` (the exact inverse of [`Self::forward`]).
+    pub fn invert_ln(&self, ln_force: f32, ln_duration: f32) -> (f32, f32) {
+        let a = ln_force - self.ln_force_coeff;
+        let b = ln_duration - self.ln_duration_coeff;
+        let y = (a - 2.0 * b) / JACOBIAN;
+        (b + 0.2 * y, y)
+    }
+
+    /// The radius and speed this class needs for a pulse of `peak_force_n` and `duration_s`,
+    /// and where they lie against the class's ranges.
+    pub fn invert(&self, peak_force_n: f32, duration_s: f32) -> Inverted {
+        let (x, y) = self.invert_ln(math::ln(peak_force_n), math::ln(duration_s));
+        Inverted {
+            radius_m: math::exp(x),
+            speed_m_s: math::exp(y),
+            radius_side: side(x, self.ln_radius),
+            speed_side: side(y, self.ln_speed),
+        }
+    }
+
+    /// The four corners `(ln R, ln u)` of the class's box.
+    pub fn corners(&self) -> [(f32, f32); 4] {
+        let (x0, x1) = self.ln_radius;
+        let (y0, y1) = self.ln_speed;
+        [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+    }
+
+    /// Prior density of `ln u` at `y` (zero outside the range):
+    /// `beta e^(beta (y - y1)) / (1 - e^(beta (y0 - y1)))`, or `1 / (y1 - y0)` for `beta = 0`.
+    pub fn speed_density(&self, y: f32) -> f32 {
+        let (y0, y1) = self.ln_speed;
+        if !(y0..=y1).contains(&y) {
+            return 0.0;
+        }
+        let b = self.speed_beta;
+        if b.abs() < 1e-6 {
+            return 1.0 / (y1 - y0);
+        }
+        b * math::exp(b * (y - y1)) / (1.0 - math::exp(b * (y0 - y1)))
+    }
+
+    /// Noiseless prior density of the class at `(ln F_max, ln t_c)`:
+    /// `p(x) p(y) / 1.6` with `p(x) = 1 / (x1 - x0)` inside the box, 0 outside.
+    pub fn density(&self, ln_force: f32, ln_duration: f32) -> f32 {
+        let (x, y) = self.invert_ln(ln_force, ln_duration);
+        let (x0, x1) = self.ln_radius;
+        if !(x0..=x1).contains(&x) {
+            return 0.0;
+        }
+        self.speed_density(y) / (x1 - x0) / JACOBIAN
+    }
+
+    /// Log-likelihood of a noisy observation `(ln F_max, ln t_c)` with standard deviations
+    /// `sigma_ln_force`, `sigma_ln_duration`: the class density convolved with the noise,
+    /// with the noise carried to `(x, y)` as independent
+    /// `sigma_x^2 = sF^2 / 64 + 9 sT^2 / 16`, `sigma_y^2 = (sF^2 + 4 sT^2) / 2.56`:
+    ///
+    /// `L = [Phi((x - x0)/sx) - Phi((x - x1)/sx)] / (x1 - x0) / 1.6
+    ///      * beta e^(beta (y - y1) + beta^2 sy^2 / 2) / (1 - e^(beta (y0 - y1)))
+    ///      * [Phi((y1 - y - beta sy^2)/sy) - Phi((y0 - y - beta sy^2)/sy)]`.
+    ///
+    /// `-inf` when the observation is so far outside that f32 rounds the likelihood to zero.
+    pub fn ln_likelihood(
+        &self,
+        ln_force: f32,
+        ln_duration: f32,
+        sigma_ln_force: f32,
+        sigma_ln_duration: f32,
+    ) -> f32 {
+        let (x, y) = self.invert_ln(ln_force, ln_duration);
+        let (sx, sy) = sigmas_xy(sigma_ln_force, sigma_ln_duration);
+        let (x0, x1) = self.ln_radius;
+        let (y0, y1) = self.ln_speed;
+        let ix = math::normal_cdf((x - x0) / sx) - math::normal_cdf((x - x1) / sx);
+        let b = self.speed_beta;
+        let shift = b * sy * sy;
+        let iy = math::normal_cdf((y1 - y - shift) / sy) - math::normal_cdf((y0 - y - shift) / sy);
+        if ix <= 0.0 || iy <= 0.0 {
+            return f32::NEG_INFINITY;
+        }
+        let ln_py = if b.abs() < 1e-6 {
+            -math::ln(y1 - y0)
+        } else {
+            math::ln(b / (1.0 - math::exp(b * (y0 - y1)))) + b * (y - y1) + 0.5 * b * shift
+        };
+        math::ln(ix) - math::ln(x1 - x0) - math::ln(JACOBIAN) + ln_py + math::ln(iy)
+    }
+
+    /// Standardised distance of an observation outside the class's box:
+    /// `sqrt(dx^2 + dy^2)` with `dx` the distance of `x = ln R` outside `[x0, x1]` in units of
+    /// `sigma_x` (0 inside), likewise `dy`.
+    pub fn outside_sigmas(
+        &self,
+        ln_force: f32,
+        ln_duration: f32,
+        sigma_ln_force: f32,
+        sigma_ln_duration: f32,
+    ) -> f32 {
+        let (x, y) = self.invert_ln(ln_force, ln_duration);
+        let (sx, sy) = sigmas_xy(sigma_ln_force, sigma_ln_duration);
+        let dx = outside(x, self.ln_radius) / sx;
+        let dy = outside(y, self.ln_speed) / sy;
+        math::sqrt(dx * dx + dy * dy)
+    }
+}
+
+/// Noise carried from `(ln F, ln t)` to `(x, y) = (ln R, ln u)`, each at least `1e-4`.
+fn sigmas_xy(sigma_ln_force: f32, sigma_ln_duration: f32) -> (f32, f32) {
+    let f2 = sigma_ln_force * sigma_ln_force;
+    let t2 = sigma_ln_duration * sigma_ln_duration;
+    let sx = math::sqrt(f2 / 64.0 + 0.5625 * t2);
+    let sy = math::sqrt((f2 + 4.0 * t2) / (JACOBIAN * JACOBIAN));
+    (clamp_sigma(sx), clamp_sigma(sy))
+}
+
+/// `MIN_SIGMA` for NaN or tiny values.
+fn clamp_sigma(s: f32) -> f32 {
+    if s >= MIN_SIGMA { s } else { MIN_SIGMA }
+}
+
+/// Distance of `v` outside `[lo, hi]` (0 inside).
+fn outside(v: f32, (lo, hi): (f32, f32)) -> f32 {
+    if v < lo {
+        lo - v
+    } else if v > hi {
+        v - hi
+    } else {
+        0.0
+    }
+}
+
+/// Where `v` lies against `[lo, hi]`.
+fn side(v: f32, (lo, hi): (f32, f32)) -> Side {
+    if v < lo {
+        Side::Below
+    } else if v > hi {
+        Side::Above
+    } else {
+        Side::Inside
+    }
+}

@@ -1,0 +1,67 @@
+//! The one error type of the kernel: what a scene or a model input can be wrong with.
+
+/// A parameter the kernel refused, with the name of the parameter.
+///
+/// Every constructor and closed form returns this instead of panicking or returning a
+/// non-finite number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Error {
+    /// The parameter is NaN or infinite.
+    NonFinite(&'static str),
+    /// The parameter must be strictly positive and is zero or negative.
+    NonPositive(&'static str),
+    /// A `[min, max]` range has `min > max`.
+    InvertedRange(&'static str),
+    /// Poisson's ratio is outside `[0, 0.5)`.
+    PoissonOutOfRange,
+    /// The parameter is finite but a derived quantity leaves the range f32 can carry
+    /// (below `1e-30` or above `1e30`), so the model would return garbage.
+    Unrepresentable(&'static str),
+    /// A scene needs at least two particle classes.
+    TooFewClasses,
+    /// More particle classes than the scene's fixed capacity.
+    TooManyClasses,
+    /// The setting is outside its documented range (for example a confidence outside `(0.5, 1)`).
+    OutOfRange(&'static str),
+}
+
+impl core::fmt::Display for Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Error::NonFinite(p) => write!(f, "{p} is not finite"),
+            Error::NonPositive(p) => write!(f, "{p} must be > 0"),
+            Error::InvertedRange(p) => write!(f, "range {p} has min > max"),
+            Error::PoissonOutOfRange => write!(f, "Poisson's ratio must be in [0, 0.5)"),
+            Error::Unrepresentable(p) => write!(f, "{p} leaves the range f32 can carry"),
+            Error::TooFewClasses => write!(f, "a scene needs at least two classes"),
+            Error::TooManyClasses => write!(f, "more classes than the scene's capacity"),
+            Error::OutOfRange(p) => write!(f, "{p} is outside its allowed range"),
+        }
+    }
+}
+
+impl core::error::Error for Error {}
+
+/// `Ok(x)` when `x` is finite and `> 0`, else the matching [`Error`] naming `what`.
+pub(crate) fn positive(x: f32, what: &'static str) -> Result<f32, Error> {
+    if !x.is_finite() {
+        Err(Error::NonFinite(what))
+    } else if x <= 0.0 {
+        Err(Error::NonPositive(what))
+    } else {
+        Ok(x)
+    }
+}
+
+/// Smallest and largest magnitude a derived quantity may have before the scene refuses it.
+pub(crate) const REPRESENTABLE: (f32, f32) = (1e-30, 1e30);
+
+/// `Ok(x)` when `x` is finite and inside [`REPRESENTABLE`], else [`Error::Unrepresentable`].
+pub(crate) fn representable(x: f32, what: &'static str) -> Result<f32, Error> {
+    if x.is_finite() && x >= REPRESENTABLE.0 && x <= REPRESENTABLE.1 {
+        Ok(x)
+    } else {
+        Err(Error::Unrepresentable(what))
+    }
+}

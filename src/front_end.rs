@@ -1,0 +1,1 @@
+//! Accelerometer front ends (in progress).

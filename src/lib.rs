@@ -1,0 +1,24 @@
+#![doc = include_str!("../README.md")]
+#![no_std]
+#![deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::indexing_slicing)]
+
+pub mod classifier;
+pub mod counters;
+pub mod detector;
+pub mod envelope;
+pub mod error;
+pub mod front_end;
+pub mod hertz;
+pub mod material;
+pub mod math;
+pub mod monitor;
+pub mod scene;
+
+pub use classifier::{Measurement, RejectReason, Verdict};
+pub use counters::Counters;
+pub use detector::{Detection, Detector};
+pub use envelope::{Envelope, Range, Side};
+pub use error::Error;
+pub use material::Material;
+pub use monitor::{Event, Monitor, Report};
+pub use scene::{ParticleClass, Scene, SensorChain, Settings, Speed};

@@ -1,0 +1,110 @@
+//! The whole node pipeline: scene + detector + classifier + counters, fed one sample at a time.
+
+use crate::classifier::{Measurement, Verdict};
+use crate::counters::Counters;
+use crate::detector::{Detection, Detector};
+use crate::scene::{DEFAULT_CLASSES, Scene};
+
+/// One classified (or rejected) pulse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Report {
+    /// Index of the pulse's largest sample in the stream.
+    pub at_sample: u64,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The measured peak force and duration, when the pulse could be measured.
+    pub measurement: Option<Measurement>,
+}
+
+/// What the monitor reports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Event {
+    /// A pulse ended.
+    Pulse(Report),
+    /// The sensor looks stuck (no change for `stuck_samples` samples).
+    Stuck {
+        /// Index of the sample that completed the stuck run.
+        at_sample: u64,
+    },
+}
+
+/// Scene, detector and counters in one value of fixed size: the kernel as a node runs it.
+#[derive(Debug, Clone)]
+pub struct Monitor<const N: usize = DEFAULT_CLASSES> {
+    scene: Scene<N>,
+    detector: Detector,
+    counters: Counters<N>,
+}
+
+impl<const N: usize> Monitor<N> {
+    /// A monitor for a built scene.
+    pub fn new(scene: Scene<N>) -> Self {
+        let detector = Detector::new(&scene);
+        Self {
+            scene,
+            detector,
+            counters: Counters::default(),
+        }
+    }
+
+    /// Feeds one ADC sample; returns an event when a pulse ends or the sensor is stuck.
+    #[inline]
+    pub fn feed(&mut self, sample: i32) -> Option<Event> {
+        self.counters.samples = self.counters.samples.saturating_add(1);
+        let d = self.detector.feed(sample)?;
+        Some(self.handle(d))
+    }
+
+    /// Reports `lost` dropped samples (see [`Detector::gap`]).
+    pub fn gap(&mut self, lost: u32) -> Option<Event> {
+        self.counters.gaps = self.counters.gaps.saturating_add(1);
+        self.counters.lost_samples = self.counters.lost_samples.saturating_add(lost as u64);
+        self.counters.samples = self.counters.samples.saturating_add(lost as u64);
+        let d = self.detector.gap(lost)?;
+        Some(self.handle(d))
+    }
+
+    /// Ends the stream (a pulse in progress is rejected as truncated).
+    pub fn finish(&mut self) -> Option<Event> {
+        let d = self.detector.finish()?;
+        Some(self.handle(d))
+    }
+
+    fn handle(&mut self, d: Detection) -> Event {
+        match d {
+            Detection::Stuck { at_sample } => {
+                self.counters.stuck_runs = self.counters.stuck_runs.saturating_add(1);
+                Event::Stuck { at_sample }
+            }
+            Detection::Pulse { at_sample, outcome } => {
+                let (verdict, measurement) = match outcome {
+                    Ok(m) => (self.scene.classify(&m), Some(m)),
+                    Err(r) => (Verdict::Rejected(r), None),
+                };
+                self.counters.record(&verdict);
+                Event::Pulse(Report {
+                    at_sample,
+                    verdict,
+                    measurement,
+                })
+            }
+        }
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene<N> {
+        &self.scene
+    }
+
+    /// The detector.
+    pub fn detector(&self) -> &Detector {
+        &self.detector
+    }
+
+    /// The counters.
+    pub fn counters(&self) -> &Counters<N> {
+        &self.counters
+    }
+}

@@ -1,0 +1,410 @@
+//! A scene: the plate, the particle classes and the sensor chain, with everything the stream
+//! needs precomputed once (envelopes, separability, detector thresholds).
+
+use heapless::{String, Vec};
+
+use crate::envelope::{Envelope, Range};
+use crate::error::{Error, positive, representable};
+use crate::hertz::{self, drop_speed_m_s};
+use crate::material::{Material, effective_modulus_pa};
+use crate::math;
+
+/// Default number of classes a scene can hold.
+pub const DEFAULT_CLASSES: usize = 4;
+
+/// Most classes any scene can hold (the classifier's scratch space).
+pub const MAX_CLASSES: usize = 32;
+
+/// Longest class name, in bytes.
+pub const NAME_LEN: usize = 16;
+
+/// Largest separability grid (cells per side) a scene accepts.
+pub const MAX_SEPARABILITY_GRID: u16 = 256;
+
+/// How the impact speed of a class is given, and so its prior.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Speed {
+    /// Speed in m/s, uniform on the range (the paper's `1 <= u <= 5`).
+    Uniform(Range),
+    /// Drop height in m, uniform on the range; `u = sqrt(2 g h)`, so `p(u) ~ u`.
+    DropHeight(Range),
+}
+
+/// One particle class: a name, a material, and the radius and speed it comes with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParticleClass {
+    /// Name shown in reports (at most [`NAME_LEN`] bytes).
+    pub name: String<NAME_LEN>,
+    /// The particle's material.
+    pub material: Material,
+    /// Sphere radius in m, log-uniform on the range.
+    pub radius_m: Range,
+    /// Impact speed.
+    pub speed: Speed,
+    /// Prior weight of the class (relative share of impacts), `> 0`.
+    pub prior: f32,
+}
+
+impl ParticleClass {
+    /// A class with a prior weight of 1; a name longer than [`NAME_LEN`] bytes is cut.
+    pub fn new(name: &str, material: Material, radius_m: Range, speed: Speed) -> Self {
+        let mut s = String::new();
+        for c in name.chars() {
+            if s.push(c).is_err() {
+                break;
+            }
+        }
+        Self {
+            name: s,
+            material,
+            radius_m,
+            speed,
+            prior: 1.0,
+        }
+    }
+}
+
+/// The sensor chain the kernel inverts: integer ADC counts to contact force.
+///
+/// A rigid plate of effective mass `M` (kg) under an accelerometer of `S` counts per m/s^2 gives
+/// `F = counts * M / S`: `force_per_count_n = M / S`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SensorChain {
+    /// Sample rate in Hz.
+    pub sample_rate_hz: f32,
+    /// Contact force per ADC count above the baseline, in N.
+    pub force_per_count_n: f32,
+    /// RMS noise of the quiet signal in counts (sets the thresholds).
+    pub noise_rms_counts: f32,
+    /// Lowest ADC code (a sample at or below it is saturated).
+    pub adc_min: i32,
+    /// Highest ADC code (a sample at or above it is saturated).
+    pub adc_max: i32,
+}
+
+impl SensorChain {
+    /// A chain from the plate's effective mass (kg) and the accelerometer's sensitivity
+    /// (counts per m/s^2): `force_per_count_n = effective_mass_kg / counts_per_m_s2`.
+    pub fn from_plate(
+        sample_rate_hz: f32,
+        effective_mass_kg: f32,
+        counts_per_m_s2: f32,
+        noise_rms_counts: f32,
+        adc_bits: u8,
+    ) -> Self {
+        let bits = adc_bits.clamp(2, 31);
+        let half = 1i64 << (bits - 1);
+        Self {
+            sample_rate_hz,
+            force_per_count_n: effective_mass_kg / counts_per_m_s2,
+            noise_rms_counts,
+            adc_min: (-half) as i32,
+            adc_max: (half - 1) as i32,
+        }
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        positive(self.sample_rate_hz, "sample_rate_hz")?;
+        positive(self.force_per_count_n, "force_per_count_n")?;
+        if !self.noise_rms_counts.is_finite() {
+            return Err(Error::NonFinite("noise_rms_counts"));
+        }
+        if self.noise_rms_counts < 0.0 {
+            return Err(Error::NonPositive("noise_rms_counts"));
+        }
+        if self.adc_min >= self.adc_max {
+            return Err(Error::InvertedRange("adc_min..adc_max"));
+        }
+        Ok(())
+    }
+}
+
+/// Detector and classifier settings; [`Settings::default`] is what the presets use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settings {
+    /// A pulse starts when a sample exceeds the baseline by this many noise RMS (and at least
+    /// 2 counts).
+    pub trigger_sigmas: f32,
+    /// A pulse ends after [`Settings::hold_samples`] samples below baseline + this many RMS.
+    pub release_sigmas: f32,
+    /// Samples below the release level that end a pulse.
+    pub hold_samples: u16,
+    /// Baseline (DC) tracking time constant in s.
+    pub baseline_tau_s: f32,
+    /// Identical consecutive samples that flag a stuck sensor (0: off). Only active when
+    /// the noise RMS is at least one count, so that a quiet sensor is never called stuck.
+    pub stuck_samples: u16,
+    /// Model tolerance in log units added (in quadrature) to the measurement noise of both
+    /// `ln F_max` and `ln t_c`: what damping, the plate and the sensor do that the Hertz model
+    /// does not.
+    pub model_sigma: f32,
+    /// Posterior above which a class is reported; below it the pulse is `Ambiguous`.
+    pub confidence: f32,
+    /// Standardised distance outside every envelope beyond which a pulse is `OutOfEnvelope`.
+    pub out_sigmas: f32,
+    /// Cells per side of the grid that integrates the separability at build time.
+    pub separability_grid: u16,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            trigger_sigmas: 6.0,
+            release_sigmas: 3.0,
+            hold_samples: 2,
+            baseline_tau_s: 0.02,
+            stuck_samples: 64,
+            model_sigma: 0.03,
+            confidence: 0.9,
+            out_sigmas: 4.0,
+            separability_grid: 48,
+        }
+    }
+}
+
+impl Settings {
+    fn check(&self) -> Result<(), Error> {
+        positive(self.trigger_sigmas, "trigger_sigmas")?;
+        positive(self.release_sigmas, "release_sigmas")?;
+        positive(self.baseline_tau_s, "baseline_tau_s")?;
+        positive(self.out_sigmas, "out_sigmas")?;
+        if !self.model_sigma.is_finite() || self.model_sigma < 0.0 {
+            return Err(Error::OutOfRange("model_sigma"));
+        }
+        if self.release_sigmas > self.trigger_sigmas {
+            return Err(Error::InvertedRange("release_sigmas..trigger_sigmas"));
+        }
+        if !(self.confidence > 0.5 && self.confidence < 1.0) {
+            return Err(Error::OutOfRange("confidence"));
+        }
+        if self.hold_samples == 0 {
+            return Err(Error::NonPositive("hold_samples"));
+        }
+        if self.separability_grid < 2 || self.separability_grid > MAX_SEPARABILITY_GRID {
+            return Err(Error::OutOfRange("separability_grid"));
+        }
+        Ok(())
+    }
+}
+
+/// How well the scene's classes can be told apart at all, from the noiseless envelopes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Separability {
+    /// Prior-weighted share of impacts that land where another class is also possible.
+    pub overlap_share: f32,
+    /// Bayes error without noise: the share of impacts even the best classifier on exact
+    /// `(F_max, t_c)` gets wrong (the forced-choice accuracy ceiling is `1 - bayes_error`).
+    pub bayes_error: f32,
+}
+
+/// A built scene: classes with their envelopes, sensor chain, settings, separability.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene<const N: usize = DEFAULT_CLASSES> {
+    plate: Material,
+    classes: Vec<ParticleClass, N>,
+    envelopes: Vec<Envelope, N>,
+    ln_priors: Vec<f32, N>,
+    sensor: SensorChain,
+    settings: Settings,
+    separability: Separability,
+    shortest_duration_s: f32,
+    longest_duration_s: f32,
+}
+
+impl<const N: usize> Scene<N> {
+    /// Builds a scene and precomputes every class's envelope and the separability.
+    ///
+    /// Refuses, with a typed [`Error`]: invalid materials, ranges or sensor settings; fewer than
+    /// two classes or more than `N`; any corner of any envelope whose peak force or duration
+    /// f32 cannot carry; a scene whose shortest pulse is less than one sample long.
+    pub fn new(
+        plate: Material,
+        classes: &[ParticleClass],
+        sensor: SensorChain,
+        settings: Settings,
+    ) -> Result<Self, Error> {
+        plate.validate()?;
+        sensor.check()?;
+        settings.check()?;
+        if classes.len() < 2 {
+            return Err(Error::TooFewClasses);
+        }
+        if classes.len() > N || classes.len() > MAX_CLASSES {
+            return Err(Error::TooManyClasses);
+        }
+        let mut envelopes = Vec::new();
+        let mut ln_priors = Vec::new();
+        let mut stored = Vec::new();
+        let mut shortest = f32::INFINITY;
+        let mut longest = 0.0f32;
+        for c in classes {
+            let e_eff = effective_modulus_pa(&c.material, &plate)?;
+            let (speed, beta) = match c.speed {
+                Speed::Uniform(r) => (r.checked("speed_m_s")?, 1.0),
+                Speed::DropHeight(h) => {
+                    let h = h.checked("drop_height_m")?;
+                    (Range::new(drop_speed_m_s(h.min)?, drop_speed_m_s(h.max)?), 2.0)
+                }
+            };
+            let env = Envelope::new(e_eff, c.material.density_kg_m3, c.radius_m, speed, beta)?;
+            // Shortest pulse: smallest radius, highest speed; longest: the opposite.
+            let short = hertz::impact(e_eff, c.material.density_kg_m3, c.radius_m.min, speed.max)?;
+            let long = hertz::impact(e_eff, c.material.density_kg_m3, c.radius_m.max, speed.min)?;
+            shortest = shortest.min(short.duration_s);
+            longest = longest.max(long.duration_s);
+            let prior = positive(c.prior, "prior")?;
+            // Capacity was checked above: these pushes cannot fail.
+            let _ = envelopes.push(env);
+            let _ = ln_priors.push(math::ln(prior));
+            let _ = stored.push(c.clone());
+        }
+        if shortest * sensor.sample_rate_hz < 1.0 {
+            return Err(Error::OutOfRange("sample_rate_hz (shortest pulse < 1 sample)"));
+        }
+        representable(longest * sensor.sample_rate_hz, "longest pulse in samples")?;
+        let mut scene = Self {
+            plate,
+            classes: stored,
+            envelopes,
+            ln_priors,
+            sensor,
+            settings,
+            separability: Separability {
+                overlap_share: 0.0,
+                bayes_error: 0.0,
+            },
+            shortest_duration_s: shortest,
+            longest_duration_s: longest,
+        };
+        scene.separability = scene.integrate_separability();
+        Ok(scene)
+    }
+
+    /// The plate material.
+    pub fn plate(&self) -> &Material {
+        &self.plate
+    }
+
+    /// The classes, in the order verdicts index them.
+    pub fn classes(&self) -> &[ParticleClass] {
+        &self.classes
+    }
+
+    /// The envelope of each class, same order as [`Self::classes`].
+    pub fn envelopes(&self) -> &[Envelope] {
+        &self.envelopes
+    }
+
+    /// `ln` of each class's prior weight.
+    pub fn ln_priors(&self) -> &[f32] {
+        &self.ln_priors
+    }
+
+    /// The sensor chain.
+    pub fn sensor(&self) -> &SensorChain {
+        &self.sensor
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// How well the classes separate without noise (computed at build).
+    pub fn separability(&self) -> Separability {
+        self.separability
+    }
+
+    /// Shortest and longest Hertz contact duration over all classes, in s.
+    pub fn duration_bounds_s(&self) -> (f32, f32) {
+        (self.shortest_duration_s, self.longest_duration_s)
+    }
+
+    /// Midpoint-rule integral over each class's `(ln R, ln u)` box, `G x G` cells: the prior
+    /// mass that lands where another class has non-zero density (overlap) and where another
+    /// class has a larger prior-weighted density (Bayes error). `O(G^2 N^2)` work, once.
+    fn integrate_separability(&self) -> Separability {
+        let g = self.settings.separability_grid;
+        let gf = g as f32;
+        let mut total_prior = 0.0f32;
+        let mut overlap = 0.0f32;
+        let mut error = 0.0f32;
+        for (i, (env, lp)) in self.envelopes.iter().zip(self.ln_priors.iter()).enumerate() {
+            let prior = math::exp(*lp);
+            total_prior += prior;
+            let (x0, x1) = env.ln_radius;
+            let (y0, y1) = env.ln_speed;
+            let (dx, dy) = ((x1 - x0) / gf, (y1 - y0) / gf);
+            let (mut m_over, mut m_err, mut m_all) = (0.0f32, 0.0f32, 0.0f32);
+            for iy in 0..g {
+                let y = y0 + (iy as f32 + 0.5) * dy;
+                let w = env.speed_density(y) * dy / gf; // p(x) dx = 1 / G
+                for ix in 0..g {
+                    let x = x0 + (ix as f32 + 0.5) * dx;
+                    let (lf, lt) = env.forward(x, y);
+                    let own = prior * env.density(lf, lt);
+                    let mut other_possible = false;
+                    let mut other_better = false;
+                    for (j, (e2, lp2)) in self.envelopes.iter().zip(self.ln_priors.iter()).enumerate() {
+                        if j == i {
+                            continue;
+                        }
+                        let d = math::exp(*lp2) * e2.density(lf, lt);
+                        other_possible |= d > 0.0;
+                        // Ties go to the lower index, as the classifier's argmax does.
+                        other_better |= d > own || (d == own && d > 0.0 && j < i);
+                    }
+                    m_all += w;
+                    if other_possible {
+                        m_over += w;
+                    }
+                    if other_better {
+                        m_err += w;
+                    }
+                }
+            }
+            if m_all > 0.0 {
+                overlap += prior * m_over / m_all;
+                error += prior * m_err / m_all;
+            }
+        }
+        Separability {
+            overlap_share: overlap / total_prior,
+            bayes_error: error / total_prior,
+        }
+    }
+}
+
+impl Scene<DEFAULT_CLASSES> {
+    /// The paper's scene: coal (1380 kg/m^3, 5.3 GPa, 0.32) and sandstone gangue (2487 kg/m^3,
+    /// 13.5 GPa, 0.123) on a carbon-steel plate (Tables 1-2), `R` in `[0.015, 0.04]` m
+    /// (Table 3), `u` in `[1, 5]` m/s (section 4.1). Sensor: 100 kS/s, 50 kg effective plate
+    /// mass, 30 counts per m/s^2, 4 counts RMS noise, 16-bit ADC.
+    pub fn paper() -> Result<Self, Error> {
+        Self::paper_with_speed(Range::new(1.0, 5.0))
+    }
+
+    /// The paper's scene with the speed narrowed to `[2.5, 3.5]` m/s: the classes separate,
+    /// since gangue at `u` looks like coal at about `1.70 u` and `3.5 / 2.5 < 1.70`.
+    pub fn paper_narrow() -> Result<Self, Error> {
+        Self::paper_with_speed(Range::new(2.5, 3.5))
+    }
+
+    fn paper_with_speed(speed: Range) -> Result<Self, Error> {
+        let radius = Range::new(0.015, 0.04);
+        let classes = [
+            ParticleClass::new("coal", Material::COAL, radius, Speed::Uniform(speed)),
+            ParticleClass::new("gangue", Material::SANDSTONE, radius, Speed::Uniform(speed)),
+        ];
+        Self::new(
+            Material::CARBON_STEEL,
+            &classes,
+            SensorChain::from_plate(100_000.0, 50.0, 30.0, 4.0, 16),
+            Settings::default(),
+        )
+    }
+}
