@@ -1,1 +1,70 @@
-fn main() {}
+//! Host benchmarks of the kernel: ns per quiet sample, per classified pulse, per scene build.
+//! Run with `cargo bench --bench kernel` and `cargo bench --bench kernel --features micromath`.
+
+use coalshock::{Measurement, Monitor, Scene};
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+
+/// A quiet stream: baseline 0 with a deterministic +-4 count pattern.
+fn quiet(n: usize) -> Vec<i32> {
+    (0..n).map(|i| ((i * 7919) % 9) as i32 - 4).collect()
+}
+
+/// One 15-sample Hertz pulse of 2000 counts (sin^1.5 shape) followed by 200 quiet samples.
+fn pulse_block() -> Vec<i32> {
+    let mut v: Vec<i32> = (0..15)
+        .map(|i| {
+            (2000.0
+                * (std::f64::consts::PI * (i as f64 + 0.5) / 15.0)
+                    .sin()
+                    .powf(1.5)) as i32
+        })
+        .collect();
+    v.extend(quiet(200));
+    v
+}
+
+fn bench(c: &mut Criterion) {
+    let backend = coalshock::math::BACKEND;
+    let scene = Scene::paper().expect("paper scene");
+    let q = quiet(10_000);
+    c.bench_function(&format!("{backend}/quiet sample"), |b| {
+        let mut m = Monitor::new(scene.clone());
+        for &s in &q {
+            m.feed(s);
+        }
+        b.iter(|| {
+            for &s in &q {
+                black_box(m.feed(black_box(s)));
+            }
+        })
+    });
+    let block = pulse_block();
+    let mut warm = Monitor::new(scene.clone());
+    for &s in &q {
+        warm.feed(s);
+    }
+    c.bench_function(&format!("{backend}/pulse (15 samples) + 200 quiet"), |b| {
+        let mut m = warm.clone();
+        b.iter(|| {
+            for &s in &block {
+                black_box(m.feed(black_box(s)));
+            }
+        })
+    });
+    let meas = Measurement {
+        peak_force_n: 3000.0,
+        duration_s: 250e-6,
+        sigma_ln_force: 0.002,
+        sigma_ln_duration: 0.005,
+    };
+    c.bench_function(&format!("{backend}/classify one measurement"), |b| {
+        b.iter(|| black_box(scene.classify(black_box(&meas))))
+    });
+    c.bench_function(&format!("{backend}/build paper scene"), |b| {
+        b.iter(|| black_box(Scene::paper()))
+    });
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -2,7 +2,7 @@
 //! errors over sample phases and rates, from ~3 to ~400 samples per pulse.
 
 use coalshock::detector::{C_AREA, Detection, Detector, shape_fit};
-use coalshock::{Material, Range, Scene, SensorChain, Settings, Speed, ParticleClass};
+use coalshock::{Material, ParticleClass, Range, Scene, SensorChain, Settings, Speed};
 
 /// `sin^(3/2)` pulse value at time `t` (s) of a pulse starting at `t0` with peak `a`.
 fn hertz_pulse(t: f64, t0: f64, tc: f64, a: f64) -> f64 {
@@ -40,7 +40,11 @@ fn area_constant_matches_quadrature() {
     // Midpoint rule on integral_0^1 sin^1.5(pi x) dx with 2e6 cells (independent of C_AREA).
     let n = 2_000_000;
     let s: f64 = (0..n)
-        .map(|i| (std::f64::consts::PI * (i as f64 + 0.5) / n as f64).sin().powf(1.5))
+        .map(|i| {
+            (std::f64::consts::PI * (i as f64 + 0.5) / n as f64)
+                .sin()
+                .powf(1.5)
+        })
         .sum::<f64>()
         / n as f64;
     assert!((s - C_AREA as f64).abs() < 1e-7, "{s}");
@@ -52,8 +56,14 @@ fn fit_errors(spp: f64) -> (f64, f64) {
     let (mut ep, mut ed) = (0.0f64, 0.0f64);
     for k in 0..64 {
         let t0 = k as f64 / 64.0;
-        let ys: Vec<f64> = (0..(spp as usize + 4)).map(|i| hertz_pulse(i as f64, t0, spp, 1000.0)).collect();
-        let (imax, &y0) = ys.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap();
+        let ys: Vec<f64> = (0..(spp as usize + 4))
+            .map(|i| hertz_pulse(i as f64, t0, spp, 1000.0))
+            .collect();
+        let (imax, &y0) = ys
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .unwrap();
         let before = if imax > 0 { ys[imax - 1] } else { 0.0 };
         let after = ys.get(imax + 1).copied().unwrap_or(0.0);
         let sum: f64 = ys.iter().sum();
@@ -69,5 +79,77 @@ fn shape_fit_errors_by_rate() {
     for spp in [3.0, 4.0, 5.0, 7.0, 10.0, 15.0, 30.0, 100.0, 400.0] {
         let (ep, ed) = fit_errors(spp);
         println!("{spp:6} samples/pulse: peak {ep:.2e} duration {ed:.2e}");
+    }
+}
+
+/// Gaussian noise from a xorshift generator (Box-Muller), seeded.
+struct Noise(u64);
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn gauss(&mut self) -> f64 {
+        let (a, b) = (self.uniform(), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+    }
+}
+
+/// Streams `pulses` Hertz pulses of amplitude `amp` counts and duration `tc_s` through the
+/// streaming detector at `rate_hz` with `noise` counts RMS, each at a different sample phase;
+/// returns the worst relative peak and duration errors and the number of pulses measured.
+fn stream_errors(
+    rate_hz: f64,
+    tc_s: f64,
+    amp: f64,
+    noise: f64,
+    pulses: usize,
+) -> (f64, f64, usize) {
+    let mut det = Detector::new(&scene(rate_hz as f32, noise as f32));
+    let mut rng = Noise(0x2545_F491_4F6C_DD1D);
+    let gap_s = 20.0 * tc_s + 2e-3;
+    let period = tc_s + gap_s + 2.0 / rate_hz;
+    let n = ((pulses as f64 * period + gap_s) * rate_hz) as usize;
+    let (mut ep, mut ed, mut found) = (0.0f64, 0.0f64, 0usize);
+    for i in 0..n {
+        let t = i as f64 / rate_hz;
+        let k = (t / period).floor();
+        // Phase of pulse k moves by a golden-ratio fraction of a sample each time.
+        let t0 = k * period + gap_s + ((k * 0.618_033_988_75).fract()) / rate_hz;
+        let y = hertz_pulse(t, t0, tc_s, amp) + noise * rng.gauss();
+        if let Some(Detection::Pulse { outcome, .. }) = det.feed(y.round() as i32) {
+            let m = outcome.expect("a clean pulse is measured");
+            ep = ep.max((m.peak_force_n as f64 / amp - 1.0).abs());
+            ed = ed.max((m.duration_s as f64 / tc_s - 1.0).abs());
+            found += 1;
+        }
+    }
+    (ep, ed, found)
+}
+
+#[test]
+fn streaming_detector_over_rates() {
+    // (rate, samples per pulse, peak bound, duration bound) for a 2000-count pulse with
+    // 4 counts RMS noise (the paper scene's SNR at mid range) and 1-count quantisation.
+    let tc = 150e-6;
+    let cases = [
+        (26_700.0, 0.015, 0.040),
+        (50_000.0, 0.015, 0.025),
+        (100_000.0, 0.010, 0.015),
+        (250_000.0, 0.010, 0.010),
+        (1_000_000.0, 0.010, 0.010),
+    ];
+    for (rate, peak_bound, dur_bound) in cases {
+        let (ep, ed, found) = stream_errors(rate, tc, 2000.0, 4.0, 40);
+        println!(
+            "{:8} S/s ({:5.1} samples/pulse): peak {ep:.2e} duration {ed:.2e} ({found} pulses)",
+            rate,
+            rate * tc
+        );
+        assert_eq!(found, 40);
+        assert!(ep < peak_bound, "rate {rate}: peak error {ep}");
+        assert!(ed < dur_bound, "rate {rate}: duration error {ed}");
     }
 }
