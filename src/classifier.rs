@@ -1,7 +1,7 @@
 //! From a measured pulse `(F_max, t_c)` to a verdict against the scene's class envelopes.
 
 use crate::envelope::{Inverted, Side};
-use crate::math;
+use crate::math::Backend;
 use crate::scene::Scene;
 
 /// A pulse the detector measured: peak contact force and contact duration, with their
@@ -114,7 +114,7 @@ impl Verdict {
     }
 }
 
-impl<const N: usize> Scene<N> {
+impl<const N: usize, M: Backend> Scene<N, M> {
     /// Classifies a measured pulse.
     ///
     /// The noise of `ln F_max` and `ln t_c` is the measurement's own combined in quadrature with
@@ -133,10 +133,10 @@ impl<const N: usize> Scene<N> {
         let model2 = s.model_sigma * s.model_sigma;
         let finite_or = |v: f32| if v.is_finite() { v } else { 0.0 };
         let (a, b) = (finite_or(m.sigma_ln_force), finite_or(m.sigma_ln_duration));
-        let sf = math::sqrt(a * a + model2);
-        let st = math::sqrt(b * b + model2);
-        let lf = math::ln(m.peak_force_n);
-        let lt = math::ln(m.duration_s);
+        let sf = M::sqrt(a * a + model2);
+        let st = M::sqrt(b * b + model2);
+        let lf = M::ln(m.peak_force_n);
+        let lt = M::ln(m.duration_s);
 
         let mut nearest = 0u8;
         let mut nearest_d = f32::INFINITY;
@@ -150,12 +150,12 @@ impl<const N: usize> Scene<N> {
             .zip(lls.iter_mut())
             .enumerate()
         {
-            let d = env.outside_sigmas(lf, lt, sf, st);
+            let d = env.outside_sigmas::<M>(lf, lt, sf, st);
             if d < nearest_d {
                 nearest_d = d;
                 nearest = i as u8;
             }
-            let ll = env.ln_likelihood(lf, lt, sf, st) + lp;
+            let ll = env.ln_likelihood::<M>(lf, lt, sf, st) + lp;
             *slot = ll;
             if ll > best_ll {
                 best_ll = ll;
@@ -172,7 +172,7 @@ impl<const N: usize> Scene<N> {
         }
         // Posterior of the best class by log-sum-exp.
         let n = self.envelopes().len();
-        let sum: f32 = lls.iter().take(n).map(|&ll| math::exp(ll - best_ll)).sum();
+        let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - best_ll)).sum();
         let posterior = 1.0 / sum;
         if posterior >= s.confidence {
             Verdict::Class {
@@ -188,6 +188,6 @@ impl<const N: usize> Scene<N> {
     pub fn invert(&self, class: u8, m: &Measurement) -> Option<Inverted> {
         self.envelopes()
             .get(class as usize)
-            .map(|e| e.invert(m.peak_force_n, m.duration_s))
+            .map(|e| e.invert::<M>(m.peak_force_n, m.duration_s))
     }
 }

@@ -21,7 +21,7 @@
 use heapless::HistoryBuf;
 
 use crate::classifier::{Measurement, RejectReason};
-use crate::math;
+use crate::math::{self, Backend, DefaultBackend};
 use crate::scene::Scene;
 
 /// Samples kept before the trigger and added to the pulse.
@@ -97,9 +97,10 @@ impl Pulse {
     };
 }
 
-/// The streaming detector. Build it from a scene with [`Detector::new`].
+/// The streaming detector, with math backend `M` for the per-pulse fit. Build it from a
+/// scene with [`Detector::new`].
 #[derive(Debug, Clone)]
-pub struct Detector {
+pub struct Detector<M: Backend = DefaultBackend> {
     trigger: f32,
     release: f32,
     noise: f32,
@@ -119,22 +120,25 @@ pub struct Detector {
     state: State,
     pulse: Pulse,
     next_index: u64,
+    backend: M,
 }
 
-impl Detector {
+impl<M: Backend> Detector<M> {
     /// A detector for the scene's sensor chain and settings.
     ///
     /// `hold = max(hold_samples, 0.05 t_c,min fs)`; a pulse longer than
     /// `3 t_c,max fs + PRE_TRIGGER + hold` samples is rejected as `TooLong`; the baseline
     /// weight per sample is `alpha = 1 - exp(-1 / (tau fs))`.
-    pub fn new<const N: usize>(scene: &Scene<N>) -> Self {
+    pub fn new<const N: usize>(scene: &Scene<N, M>) -> Self {
         let sensor = scene.sensor();
         let s = scene.settings();
         let fs = sensor.sample_rate_hz;
         let (short, long) = scene.duration_bounds_s();
-        let hold = (0.05 * short * fs).max(s.hold_samples as f32).min(u16::MAX as f32) as u16;
-        let max_samples = (3.0 * long * fs + PRE_TRIGGER as f32 + hold as f32)
-            .min(u32::MAX as f32 / 2.0) as u32;
+        let hold = (0.05 * short * fs)
+            .max(s.hold_samples as f32)
+            .min(u16::MAX as f32) as u16;
+        let max_samples =
+            (3.0 * long * fs + PRE_TRIGGER as f32 + hold as f32).min(u32::MAX as f32 / 2.0) as u32;
         let noise = sensor.noise_rms_counts;
         Self {
             trigger: (s.trigger_sigmas * noise).max(2.0),
@@ -142,7 +146,7 @@ impl Detector {
             noise,
             hold,
             max_samples,
-            alpha: 1.0 - math::exp(-1.0 / (s.baseline_tau_s * fs)),
+            alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
             stuck_limit: if noise >= 1.0 { s.stuck_samples } else { 0 },
             adc_min: sensor.adc_min,
             adc_max: sensor.adc_max,
@@ -156,7 +160,13 @@ impl Detector {
             state: State::Idle,
             pulse: Pulse::EMPTY,
             next_index: 0,
+            backend: M::default(),
         }
+    }
+
+    /// The math backend.
+    pub fn backend(&self) -> M {
+        self.backend
     }
 
     /// Number of samples fed so far.
@@ -349,14 +359,14 @@ impl Detector {
         if p.pileup {
             return reject(RejectReason::PileUp);
         }
-        let (peak, duration) = match shape_fit(p.max, p.before_max, p.after_max, p.sum) {
+        let (peak, duration) = match shape_fit::<M>(p.max, p.before_max, p.after_max, p.sum) {
             Some(v) => v,
             None => return reject(RejectReason::Implausible),
         };
         let n = p.samples as f32;
         let sigma_ln_force = self.noise / peak;
-        let sigma_area = self.noise * math::sqrt(n) / p.sum;
-        let sigma_ln_duration = math::sqrt(sigma_area * sigma_area + sigma_ln_force * sigma_ln_force);
+        let sigma_area = self.noise * M::sqrt(n) / p.sum;
+        let sigma_ln_duration = M::sqrt(sigma_area * sigma_area + sigma_ln_force * sigma_ln_force);
         Detection::Pulse {
             at_sample,
             outcome: Ok(Measurement {
@@ -379,11 +389,13 @@ fn second_peak(max: f32, valley: f32, v: f32, trigger: f32) -> bool {
 /// Peak (counts) and duration (samples) of a sampled Hertz pulse from its largest sample
 /// `y0`, the samples before and after it and the sum of all its samples; `None` when they are
 /// not a positive pulse.
-pub fn shape_fit(y0: f32, before: f32, after: f32, sum: f32) -> Option<(f32, f32)> {
+pub fn shape_fit<M: Backend>(y0: f32, before: f32, after: f32, sum: f32) -> Option<(f32, f32)> {
     if !(y0 > 0.0 && sum > 0.0 && y0.is_finite() && sum.is_finite()) {
         return None;
     }
-    let z = |y: f32| if y > 0.0 { math::powf(y, 2.0 / 3.0) } else { 0.0 };
+    let z = |y: f32| {
+        if y > 0.0 { M::powf(y, 2.0 / 3.0) } else { 0.0 }
+    };
     let (z0, za, zb) = (z(y0), z(before.min(y0)), z(after.min(y0)));
     let mut peak = y0;
     let mut duration = sum / (C_AREA * peak);
@@ -395,7 +407,7 @@ pub fn shape_fit(y0: f32, before: f32, after: f32, sum: f32) -> Option<(f32, f32
             let (s, c) = (math::sin(d), math::cos(d));
             let r = za.max(zb) / z0;
             let t = ((r - c) / s).clamp(0.0, math::sin(half) / math::cos(half));
-            z0 * math::sqrt(1.0 + t * t)
+            z0 * M::sqrt(1.0 + t * t)
         } else {
             let curv = za - 2.0 * z0 + zb;
             if curv < 0.0 {
@@ -405,7 +417,7 @@ pub fn shape_fit(y0: f32, before: f32, after: f32, sum: f32) -> Option<(f32, f32
                 z0
             }
         };
-        peak = math::pow_3_2(b.clamp(z0, b_max));
+        peak = M::pow_3_2(b.clamp(z0, b_max));
         duration = sum / (C_AREA * peak);
     }
     if peak.is_finite() && duration.is_finite() && duration > 0.0 {

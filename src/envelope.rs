@@ -13,7 +13,7 @@
 
 use crate::error::{Error, positive, representable};
 use crate::hertz::CONTACT_TIME_FACTOR;
-use crate::math;
+use crate::math::{self, Backend};
 
 /// `|det|` of the map `(ln R, ln u) -> (ln F_max, ln t_c)`.
 pub const JACOBIAN: f32 = 1.6;
@@ -97,7 +97,7 @@ impl Envelope {
     ///
     /// `ln c_F = ln(4/3) + (2/5) ln E* + (3/5) ln(5 pi rho / 4)`,
     /// `ln c_t = ln 2.9432752 + (2/5) (ln(5 pi rho / 4) - ln E*)`.
-    pub fn new(
+    pub fn new<M: Backend>(
         effective_modulus_pa: f32,
         density_kg_m3: f32,
         radius_m: Range,
@@ -108,20 +108,20 @@ impl Envelope {
         let rho = positive(density_kg_m3, "density_kg_m3")?;
         let r = radius_m.checked("radius_m")?;
         let u = speed_m_s.checked("speed_m_s")?;
-        let ln_e = math::ln(e);
-        let ln_rho = math::ln(5.0 * core::f32::consts::PI / 4.0 * rho);
+        let ln_e = M::ln(e);
+        let ln_rho = M::ln(5.0 * core::f32::consts::PI / 4.0 * rho);
         let env = Self {
-            ln_force_coeff: math::ln(4.0 / 3.0) + 0.4 * ln_e + 0.6 * ln_rho,
-            ln_duration_coeff: math::ln(CONTACT_TIME_FACTOR) + 0.4 * (ln_rho - ln_e),
-            ln_radius: (math::ln(r.min), math::ln(r.max)),
-            ln_speed: (math::ln(u.min), math::ln(u.max)),
+            ln_force_coeff: M::ln(4.0 / 3.0) + 0.4 * ln_e + 0.6 * ln_rho,
+            ln_duration_coeff: M::ln(CONTACT_TIME_FACTOR) + 0.4 * (ln_rho - ln_e),
+            ln_radius: (M::ln(r.min), M::ln(r.max)),
+            ln_speed: (M::ln(u.min), M::ln(u.max)),
             speed_beta,
         };
         // Every corner must give a peak force and duration that f32 carries.
         for (x, y) in env.corners() {
             let (lf, lt) = env.forward(x, y);
-            representable(math::exp(lf), "peak force")?;
-            representable(math::exp(lt), "contact duration")?;
+            representable(M::exp(lf), "peak force")?;
+            representable(M::exp(lt), "contact duration")?;
         }
         Ok(env)
     }
@@ -144,11 +144,11 @@ impl Envelope {
 
     /// The radius and speed this class needs for a pulse of `peak_force_n` and `duration_s`,
     /// and where they lie against the class's ranges.
-    pub fn invert(&self, peak_force_n: f32, duration_s: f32) -> Inverted {
-        let (x, y) = self.invert_ln(math::ln(peak_force_n), math::ln(duration_s));
+    pub fn invert<M: Backend>(&self, peak_force_n: f32, duration_s: f32) -> Inverted {
+        let (x, y) = self.invert_ln(M::ln(peak_force_n), M::ln(duration_s));
         Inverted {
-            radius_m: math::exp(x),
-            speed_m_s: math::exp(y),
+            radius_m: M::exp(x),
+            speed_m_s: M::exp(y),
             radius_side: side(x, self.ln_radius),
             speed_side: side(y, self.ln_speed),
         }
@@ -163,7 +163,7 @@ impl Envelope {
 
     /// Prior density of `ln u` at `y` (zero outside the range):
     /// `beta e^(beta (y - y1)) / (1 - e^(beta (y0 - y1)))`, or `1 / (y1 - y0)` for `beta = 0`.
-    pub fn speed_density(&self, y: f32) -> f32 {
+    pub fn speed_density<M: Backend>(&self, y: f32) -> f32 {
         let (y0, y1) = self.ln_speed;
         if !(y0..=y1).contains(&y) {
             return 0.0;
@@ -172,18 +172,18 @@ impl Envelope {
         if b.abs() < 1e-6 {
             return 1.0 / (y1 - y0);
         }
-        b * math::exp(b * (y - y1)) / (1.0 - math::exp(b * (y0 - y1)))
+        b * M::exp(b * (y - y1)) / (1.0 - M::exp(b * (y0 - y1)))
     }
 
     /// Noiseless prior density of the class at `(ln F_max, ln t_c)`:
     /// `p(x) p(y) / 1.6` with `p(x) = 1 / (x1 - x0)` inside the box, 0 outside.
-    pub fn density(&self, ln_force: f32, ln_duration: f32) -> f32 {
+    pub fn density<M: Backend>(&self, ln_force: f32, ln_duration: f32) -> f32 {
         let (x, y) = self.invert_ln(ln_force, ln_duration);
         let (x0, x1) = self.ln_radius;
         if !(x0..=x1).contains(&x) {
             return 0.0;
         }
-        self.speed_density(y) / (x1 - x0) / JACOBIAN
+        self.speed_density::<M>(y) / (x1 - x0) / JACOBIAN
     }
 
     /// Log-likelihood of a noisy observation `(ln F_max, ln t_c)` with standard deviations
@@ -196,7 +196,7 @@ impl Envelope {
     ///      * [Phi((y1 - y - beta sy^2)/sy) - Phi((y0 - y - beta sy^2)/sy)]`.
     ///
     /// `-inf` when the observation is so far outside that f32 rounds the likelihood to zero.
-    pub fn ln_likelihood(
+    pub fn ln_likelihood<M: Backend>(
         &self,
         ln_force: f32,
         ln_duration: f32,
@@ -204,7 +204,7 @@ impl Envelope {
         sigma_ln_duration: f32,
     ) -> f32 {
         let (x, y) = self.invert_ln(ln_force, ln_duration);
-        let (sx, sy) = sigmas_xy(sigma_ln_force, sigma_ln_duration);
+        let (sx, sy) = sigmas_xy::<M>(sigma_ln_force, sigma_ln_duration);
         let (x0, x1) = self.ln_radius;
         let (y0, y1) = self.ln_speed;
         let ix = math::normal_cdf((x - x0) / sx) - math::normal_cdf((x - x1) / sx);
@@ -215,17 +215,17 @@ impl Envelope {
             return f32::NEG_INFINITY;
         }
         let ln_py = if b.abs() < 1e-6 {
-            -math::ln(y1 - y0)
+            -M::ln(y1 - y0)
         } else {
-            math::ln(b / (1.0 - math::exp(b * (y0 - y1)))) + b * (y - y1) + 0.5 * b * shift
+            M::ln(b / (1.0 - M::exp(b * (y0 - y1)))) + b * (y - y1) + 0.5 * b * shift
         };
-        math::ln(ix) - math::ln(x1 - x0) - math::ln(JACOBIAN) + ln_py + math::ln(iy)
+        M::ln(ix) - M::ln(x1 - x0) - M::ln(JACOBIAN) + ln_py + M::ln(iy)
     }
 
     /// Standardised distance of an observation outside the class's box:
     /// `sqrt(dx^2 + dy^2)` with `dx` the distance of `x = ln R` outside `[x0, x1]` in units of
     /// `sigma_x` (0 inside), likewise `dy`.
-    pub fn outside_sigmas(
+    pub fn outside_sigmas<M: Backend>(
         &self,
         ln_force: f32,
         ln_duration: f32,
@@ -233,19 +233,19 @@ impl Envelope {
         sigma_ln_duration: f32,
     ) -> f32 {
         let (x, y) = self.invert_ln(ln_force, ln_duration);
-        let (sx, sy) = sigmas_xy(sigma_ln_force, sigma_ln_duration);
+        let (sx, sy) = sigmas_xy::<M>(sigma_ln_force, sigma_ln_duration);
         let dx = outside(x, self.ln_radius) / sx;
         let dy = outside(y, self.ln_speed) / sy;
-        math::sqrt(dx * dx + dy * dy)
+        M::sqrt(dx * dx + dy * dy)
     }
 }
 
 /// Noise carried from `(ln F, ln t)` to `(x, y) = (ln R, ln u)`, each at least `1e-4`.
-fn sigmas_xy(sigma_ln_force: f32, sigma_ln_duration: f32) -> (f32, f32) {
+fn sigmas_xy<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32) -> (f32, f32) {
     let f2 = sigma_ln_force * sigma_ln_force;
     let t2 = sigma_ln_duration * sigma_ln_duration;
-    let sx = math::sqrt(f2 / 64.0 + 0.5625 * t2);
-    let sy = math::sqrt((f2 + 4.0 * t2) / (JACOBIAN * JACOBIAN));
+    let sx = M::sqrt(f2 / 64.0 + 0.5625 * t2);
+    let sy = M::sqrt((f2 + 4.0 * t2) / (JACOBIAN * JACOBIAN));
     (clamp_sigma(sx), clamp_sigma(sy))
 }
 

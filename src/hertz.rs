@@ -15,7 +15,7 @@
 //! f32 range for any radius, speed and material the scene accepts.
 
 use crate::error::{Error, positive, representable};
-use crate::math;
+use crate::math::{Backend, DefaultBackend};
 
 /// `2 tau = (4/5) B(2/5, 1/2) = 2.9432752` (physics notes, section 1).
 pub const CONTACT_TIME_FACTOR: f32 = 2.943_275_2;
@@ -23,11 +23,16 @@ pub const CONTACT_TIME_FACTOR: f32 = 2.943_275_2;
 /// `pi`.
 const PI: f32 = core::f32::consts::PI;
 
-/// Contact stiffness `k = 4/3 E* sqrt(R)` in N/m^(3/2) (paper Eq. 4).
+/// Contact stiffness `k = 4/3 E* sqrt(R)` in N/m^(3/2) (paper Eq. 4), default backend.
 pub fn stiffness(effective_modulus_pa: f32, radius_m: f32) -> Result<f32, Error> {
+    stiffness_in::<DefaultBackend>(effective_modulus_pa, radius_m)
+}
+
+/// [`stiffness`] with the math backend `M`.
+pub fn stiffness_in<M: Backend>(effective_modulus_pa: f32, radius_m: f32) -> Result<f32, Error> {
     let e = positive(effective_modulus_pa, "effective_modulus_pa")?;
     let r = positive(radius_m, "radius_m")?;
-    representable(4.0 / 3.0 * e * math::sqrt(r), "stiffness")
+    representable(4.0 / 3.0 * e * M::sqrt(r), "stiffness")
 }
 
 /// Sphere mass `m = 4/3 pi rho R^3` in kg.
@@ -52,14 +57,25 @@ pub struct Impact {
 }
 
 /// Material constant of the penetration: `delta_max = c_delta R u^(4/5)` with
-/// `c_delta = (5 pi rho / (4 E*))^(2/5)` (m^0 s^(4/5) m^(-4/5), from Eq. 9 with `m`, `k`
-/// substituted).
-pub fn penetration_coefficient(effective_modulus_pa: f32, density_kg_m3: f32) -> Result<f32, Error> {
+/// `c_delta = (5 pi rho / (4 E*))^(2/5)` (from Eq. 9 with `m`, `k`
+/// substituted), in s^(4/5) m^(-4/5).
+pub fn penetration_coefficient(
+    effective_modulus_pa: f32,
+    density_kg_m3: f32,
+) -> Result<f32, Error> {
+    penetration_coefficient_in::<DefaultBackend>(effective_modulus_pa, density_kg_m3)
+}
+
+/// [`penetration_coefficient`] with the math backend `M`.
+pub fn penetration_coefficient_in<M: Backend>(
+    effective_modulus_pa: f32,
+    density_kg_m3: f32,
+) -> Result<f32, Error> {
     let e = positive(effective_modulus_pa, "effective_modulus_pa")?;
     let rho = positive(density_kg_m3, "density_kg_m3")?;
     // rho / E* can be as small as 1e-10: take the power of the ratio, never of a product.
     let ratio = representable(5.0 * PI / 4.0 * (rho / e), "density / modulus")?;
-    representable(math::powf(ratio, 0.4), "penetration coefficient")
+    representable(M::powf(ratio, 0.4), "penetration coefficient")
 }
 
 /// The undamped Hertz impact of a sphere of `radius_m` and `density_kg_m3` at `speed_m_s` on a
@@ -73,12 +89,22 @@ pub fn impact(
     radius_m: f32,
     speed_m_s: f32,
 ) -> Result<Impact, Error> {
-    let c_delta = penetration_coefficient(effective_modulus_pa, density_kg_m3)?;
+    impact_in::<DefaultBackend>(effective_modulus_pa, density_kg_m3, radius_m, speed_m_s)
+}
+
+/// [`impact`] with the math backend `M`.
+pub fn impact_in<M: Backend>(
+    effective_modulus_pa: f32,
+    density_kg_m3: f32,
+    radius_m: f32,
+    speed_m_s: f32,
+) -> Result<Impact, Error> {
+    let c_delta = penetration_coefficient_in::<M>(effective_modulus_pa, density_kg_m3)?;
     let r = positive(radius_m, "radius_m")?;
     let u = positive(speed_m_s, "speed_m_s")?;
-    let delta = representable(c_delta * r * math::powf(u, 0.8), "delta_max")?;
-    let k = stiffness(effective_modulus_pa, r)?;
-    let f = representable(k * math::pow_3_2(delta), "peak force")?;
+    let delta = representable(c_delta * r * M::powf(u, 0.8), "delta_max")?;
+    let k = stiffness_in::<M>(effective_modulus_pa, r)?;
+    let f = representable(k * M::pow_3_2(delta), "peak force")?;
     let t = representable(CONTACT_TIME_FACTOR * delta / u, "contact duration")?;
     let m = sphere_mass_kg(density_kg_m3, r)?;
     let j = representable(2.0 * m * u, "impulse")?;
@@ -92,8 +118,13 @@ pub fn impact(
 
 /// Free-fall speed `u = sqrt(2 g h)` in m/s from a drop height in m (`g = 9.80665`).
 pub fn drop_speed_m_s(height_m: f32) -> Result<f32, Error> {
+    drop_speed_in::<DefaultBackend>(height_m)
+}
+
+/// [`drop_speed_m_s`] with the math backend `M`.
+pub fn drop_speed_in<M: Backend>(height_m: f32) -> Result<f32, Error> {
     let h = positive(height_m, "height_m")?;
-    representable(math::sqrt(2.0 * STANDARD_GRAVITY_M_S2 * h), "drop speed")
+    representable(M::sqrt(2.0 * STANDARD_GRAVITY_M_S2 * h), "drop speed")
 }
 
 /// Standard gravity in m/s^2 (CGPM 1901).

@@ -3,6 +3,7 @@
 use crate::classifier::{Measurement, Verdict};
 use crate::counters::Counters;
 use crate::detector::{Detection, Detector};
+use crate::math::{Backend, DefaultBackend};
 use crate::scene::{DEFAULT_CLASSES, Scene};
 
 /// One classified (or rejected) pulse.
@@ -32,15 +33,15 @@ pub enum Event {
 
 /// Scene, detector and counters in one value of fixed size: the kernel as a node runs it.
 #[derive(Debug, Clone)]
-pub struct Monitor<const N: usize = DEFAULT_CLASSES> {
-    scene: Scene<N>,
-    detector: Detector,
+pub struct Monitor<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> {
+    scene: Scene<N, M>,
+    detector: Detector<M>,
     counters: Counters<N>,
 }
 
-impl<const N: usize> Monitor<N> {
+impl<const N: usize, M: Backend> Monitor<N, M> {
     /// A monitor for a built scene.
-    pub fn new(scene: Scene<N>) -> Self {
+    pub fn new(scene: Scene<N, M>) -> Self {
         let detector = Detector::new(&scene);
         Self {
             scene,
@@ -94,12 +95,12 @@ impl<const N: usize> Monitor<N> {
     }
 
     /// The scene.
-    pub fn scene(&self) -> &Scene<N> {
+    pub fn scene(&self) -> &Scene<N, M> {
         &self.scene
     }
 
     /// The detector.
-    pub fn detector(&self) -> &Detector {
+    pub fn detector(&self) -> &Detector<M> {
         &self.detector
     }
 

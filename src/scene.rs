@@ -5,9 +5,9 @@ use heapless::{String, Vec};
 
 use crate::envelope::{Envelope, Range};
 use crate::error::{Error, positive, representable};
-use crate::hertz::{self, drop_speed_m_s};
+use crate::hertz;
 use crate::material::{Material, effective_modulus_pa};
-use crate::math;
+use crate::math::{Backend, DefaultBackend};
 
 /// Default number of classes a scene can hold.
 pub const DEFAULT_CLASSES: usize = 4;
@@ -201,9 +201,10 @@ pub struct Separability {
     pub bayes_error: f32,
 }
 
-/// A built scene: classes with their envelopes, sensor chain, settings, separability.
+/// A built scene: classes with their envelopes, sensor chain, settings, separability, all
+/// computed with the math backend `M`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Scene<const N: usize = DEFAULT_CLASSES> {
+pub struct Scene<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> {
     plate: Material,
     classes: Vec<ParticleClass, N>,
     envelopes: Vec<Envelope, N>,
@@ -213,9 +214,10 @@ pub struct Scene<const N: usize = DEFAULT_CLASSES> {
     separability: Separability,
     shortest_duration_s: f32,
     longest_duration_s: f32,
+    backend: M,
 }
 
-impl<const N: usize> Scene<N> {
+impl<const N: usize, M: Backend> Scene<N, M> {
     /// Builds a scene and precomputes every class's envelope and the separability.
     ///
     /// Refuses, with a typed [`Error`]: invalid materials, ranges or sensor settings; fewer than
@@ -247,23 +249,33 @@ impl<const N: usize> Scene<N> {
                 Speed::Uniform(r) => (r.checked("speed_m_s")?, 1.0),
                 Speed::DropHeight(h) => {
                     let h = h.checked("drop_height_m")?;
-                    (Range::new(drop_speed_m_s(h.min)?, drop_speed_m_s(h.max)?), 2.0)
+                    (
+                        Range::new(
+                            hertz::drop_speed_in::<M>(h.min)?,
+                            hertz::drop_speed_in::<M>(h.max)?,
+                        ),
+                        2.0,
+                    )
                 }
             };
-            let env = Envelope::new(e_eff, c.material.density_kg_m3, c.radius_m, speed, beta)?;
+            let env = Envelope::new::<M>(e_eff, c.material.density_kg_m3, c.radius_m, speed, beta)?;
             // Shortest pulse: smallest radius, highest speed; longest: the opposite.
-            let short = hertz::impact(e_eff, c.material.density_kg_m3, c.radius_m.min, speed.max)?;
-            let long = hertz::impact(e_eff, c.material.density_kg_m3, c.radius_m.max, speed.min)?;
+            let short =
+                hertz::impact_in::<M>(e_eff, c.material.density_kg_m3, c.radius_m.min, speed.max)?;
+            let long =
+                hertz::impact_in::<M>(e_eff, c.material.density_kg_m3, c.radius_m.max, speed.min)?;
             shortest = shortest.min(short.duration_s);
             longest = longest.max(long.duration_s);
             let prior = positive(c.prior, "prior")?;
             // Capacity was checked above: these pushes cannot fail.
             let _ = envelopes.push(env);
-            let _ = ln_priors.push(math::ln(prior));
+            let _ = ln_priors.push(M::ln(prior));
             let _ = stored.push(c.clone());
         }
         if shortest * sensor.sample_rate_hz < 1.0 {
-            return Err(Error::OutOfRange("sample_rate_hz (shortest pulse < 1 sample)"));
+            return Err(Error::OutOfRange(
+                "sample_rate_hz (shortest pulse < 1 sample)",
+            ));
         }
         representable(longest * sensor.sample_rate_hz, "longest pulse in samples")?;
         let mut scene = Self {
@@ -279,6 +291,7 @@ impl<const N: usize> Scene<N> {
             },
             shortest_duration_s: shortest,
             longest_duration_s: longest,
+            backend: M::default(),
         };
         scene.separability = scene.integrate_separability();
         Ok(scene)
@@ -319,6 +332,11 @@ impl<const N: usize> Scene<N> {
         self.separability
     }
 
+    /// The math backend.
+    pub fn backend(&self) -> M {
+        self.backend
+    }
+
     /// Shortest and longest Hertz contact duration over all classes, in s.
     pub fn duration_bounds_s(&self) -> (f32, f32) {
         (self.shortest_duration_s, self.longest_duration_s)
@@ -334,7 +352,7 @@ impl<const N: usize> Scene<N> {
         let mut overlap = 0.0f32;
         let mut error = 0.0f32;
         for (i, (env, lp)) in self.envelopes.iter().zip(self.ln_priors.iter()).enumerate() {
-            let prior = math::exp(*lp);
+            let prior = M::exp(*lp);
             total_prior += prior;
             let (x0, x1) = env.ln_radius;
             let (y0, y1) = env.ln_speed;
@@ -342,18 +360,20 @@ impl<const N: usize> Scene<N> {
             let (mut m_over, mut m_err, mut m_all) = (0.0f32, 0.0f32, 0.0f32);
             for iy in 0..g {
                 let y = y0 + (iy as f32 + 0.5) * dy;
-                let w = env.speed_density(y) * dy / gf; // p(x) dx = 1 / G
+                let w = env.speed_density::<M>(y) * dy / gf; // p(x) dx = 1 / G
                 for ix in 0..g {
                     let x = x0 + (ix as f32 + 0.5) * dx;
                     let (lf, lt) = env.forward(x, y);
-                    let own = prior * env.density(lf, lt);
+                    let own = prior * env.density::<M>(lf, lt);
                     let mut other_possible = false;
                     let mut other_better = false;
-                    for (j, (e2, lp2)) in self.envelopes.iter().zip(self.ln_priors.iter()).enumerate() {
+                    for (j, (e2, lp2)) in
+                        self.envelopes.iter().zip(self.ln_priors.iter()).enumerate()
+                    {
                         if j == i {
                             continue;
                         }
-                        let d = math::exp(*lp2) * e2.density(lf, lt);
+                        let d = M::exp(*lp2) * e2.density::<M>(lf, lt);
                         other_possible |= d > 0.0;
                         // Ties go to the lower index, as the classifier's argmax does.
                         other_better |= d > own || (d == own && d > 0.0 && j < i);
@@ -379,18 +399,30 @@ impl<const N: usize> Scene<N> {
     }
 }
 
-impl Scene<DEFAULT_CLASSES> {
-    /// The paper's scene: coal (1380 kg/m^3, 5.3 GPa, 0.32) and sandstone gangue (2487 kg/m^3,
+impl Scene {
+    /// The paper's scene with the default backend; see [`Scene::paper_for`].
+    pub fn paper() -> Result<Self, Error> {
+        Self::paper_for()
+    }
+
+    /// The narrow-speed paper scene with the default backend; see [`Scene::paper_narrow_for`].
+    pub fn paper_narrow() -> Result<Self, Error> {
+        Self::paper_narrow_for()
+    }
+}
+
+impl<M: Backend> Scene<DEFAULT_CLASSES, M> {
+    /// The paper's scene with backend `M`: coal (1380 kg/m^3, 5.3 GPa, 0.32) and sandstone gangue (2487 kg/m^3,
     /// 13.5 GPa, 0.123) on a carbon-steel plate (Tables 1-2), `R` in `[0.015, 0.04]` m
     /// (Table 3), `u` in `[1, 5]` m/s (section 4.1). Sensor: 100 kS/s, 50 kg effective plate
     /// mass, 30 counts per m/s^2, 4 counts RMS noise, 16-bit ADC.
-    pub fn paper() -> Result<Self, Error> {
+    pub fn paper_for() -> Result<Self, Error> {
         Self::paper_with_speed(Range::new(1.0, 5.0))
     }
 
     /// The paper's scene with the speed narrowed to `[2.5, 3.5]` m/s: the classes separate,
     /// since gangue at `u` looks like coal at about `1.70 u` and `3.5 / 2.5 < 1.70`.
-    pub fn paper_narrow() -> Result<Self, Error> {
+    pub fn paper_narrow_for() -> Result<Self, Error> {
         Self::paper_with_speed(Range::new(2.5, 3.5))
     }
 

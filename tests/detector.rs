@@ -2,6 +2,7 @@
 //! errors over sample phases and rates, from ~3 to ~400 samples per pulse.
 
 use coalshock::detector::{C_AREA, Detection, Detector, shape_fit};
+use coalshock::math::DefaultBackend;
 use coalshock::{Material, ParticleClass, Range, Scene, SensorChain, Settings, Speed};
 
 /// `sin^(3/2)` pulse value at time `t` (s) of a pulse starting at `t0` with peak `a`.
@@ -67,7 +68,9 @@ fn fit_errors(spp: f64) -> (f64, f64) {
         let before = if imax > 0 { ys[imax - 1] } else { 0.0 };
         let after = ys.get(imax + 1).copied().unwrap_or(0.0);
         let sum: f64 = ys.iter().sum();
-        let (p, d) = shape_fit(y0 as f32, before as f32, after as f32, sum as f32).unwrap();
+        let (p, d) =
+            shape_fit::<DefaultBackend>(y0 as f32, before as f32, after as f32, sum as f32)
+                .unwrap();
         ep = ep.max((p as f64 / 1000.0 - 1.0).abs());
         ed = ed.max((d as f64 / spp - 1.0).abs());
     }
