@@ -1,6 +1,6 @@
 //! From a measured pulse `(F_max, t_c)` to a verdict against the scene's class envelopes.
 
-use crate::envelope::{Inverted, Side};
+use crate::envelope::{Inverted, NoiseXy, Side};
 use crate::math::Backend;
 use crate::scene::Scene;
 
@@ -137,6 +137,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let st = M::sqrt(b * b + model2);
         let lf = M::ln(m.peak_force_n);
         let lt = M::ln(m.duration_s);
+        let noise = NoiseXy::new::<M>(sf, st);
 
         let mut nearest = 0u8;
         let mut nearest_d = f32::INFINITY;
@@ -150,19 +151,22 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             .zip(lls.iter_mut())
             .enumerate()
         {
-            let d = env.outside_sigmas::<M>(lf, lt, sf, st);
+            let d = env.outside_sigmas_squared(lf, lt, noise);
             if d < nearest_d {
                 nearest_d = d;
                 nearest = i as u8;
             }
-            let ll = env.ln_likelihood::<M>(lf, lt, sf, st) + lp;
+            let ll = env.ln_likelihood::<M>(lf, lt, noise) + lp;
             *slot = ll;
             if ll > best_ll {
                 best_ll = ll;
                 best = i as u8;
             }
         }
-        if nearest_d > s.out_sigmas || best_ll == f32::NEG_INFINITY || !best_ll.is_finite() {
+        if nearest_d > s.out_sigmas * s.out_sigmas
+            || best_ll == f32::NEG_INFINITY
+            || !best_ll.is_finite()
+        {
             let inv = self.invert(nearest, m);
             return Verdict::OutOfEnvelope {
                 nearest,

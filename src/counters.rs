@@ -8,7 +8,8 @@ use crate::classifier::{RejectReason, Verdict};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Counters<const N: usize> {
-    /// Samples fed (including those reported lost through a gap).
+    /// Samples fed, including those reported lost through a gap, as of the last event, gap or
+    /// finish ([`crate::Monitor::samples_fed`] is always current).
     pub samples: u64,
     /// Pulses seen.
     pub pulses: u32,
@@ -24,7 +25,8 @@ pub struct Counters<const N: usize> {
     pub gaps: u32,
     /// Samples reported lost in those gaps.
     pub lost_samples: u64,
-    /// Runs of identical samples on a noisy sensor (stuck sensor).
+    /// Runs of identical samples on a noisy sensor (stuck sensor), as of the last event, gap
+    /// or finish (counted by the detector even when a stuck event coincides with a pulse).
     pub stuck_runs: u32,
 }
 
@@ -73,7 +75,10 @@ impl<const N: usize> Counters<N> {
     /// Sum of every outcome counter, in u64 so it cannot overflow.
     pub fn outcomes(&self) -> u64 {
         let s = |a: &[u32]| a.iter().map(|&v| v as u64).sum::<u64>();
-        s(&self.classified) + self.ambiguous as u64 + self.out_of_envelope as u64 + s(&self.rejected)
+        s(&self.classified)
+            + self.ambiguous as u64
+            + self.out_of_envelope as u64
+            + s(&self.rejected)
     }
 
     /// `true` when every pulse seen is in exactly one outcome counter.

@@ -18,8 +18,6 @@
 //!   `D = 0.3` (more than ~10 samples per pulse) a parabola through three `z` samples is used.
 //!   `F_max` and `t_c` are iterated three times.
 
-use heapless::HistoryBuf;
-
 use crate::classifier::{Measurement, RejectReason};
 use crate::math::{self, Backend, DefaultBackend};
 use crate::scene::Scene;
@@ -56,8 +54,14 @@ enum State {
     Idle,
     /// Inside a pulse.
     Active,
-    /// After a pulse that ran too long: waiting for the signal to come back down.
-    Recovering,
+    /// After a pulse that ran too long (`true`: the baseline is tracked fast, a DC step or a
+    /// stuck sensor may be the cause) or was cut by a gap (`false`: the baseline is frozen,
+    /// the rest of the pulse must not move it): waiting for the signal to come back down.
+    Recovering(bool),
+    /// The first sample after a gap.
+    Resumed,
+    /// The first `PRE_TRIGGER` samples, whose mean sets the baseline.
+    Unprimed,
 }
 
 /// Running sums of the pulse being cut.
@@ -77,6 +81,7 @@ struct Pulse {
     below_release: u16,
     pileup: bool,
     saturated: bool,
+    after_gap: bool,
 }
 
 impl Pulse {
@@ -94,6 +99,7 @@ impl Pulse {
         below_release: 0,
         pileup: false,
         saturated: false,
+        after_gap: false,
     };
 }
 
@@ -113,11 +119,13 @@ pub struct Detector<M: Backend = DefaultBackend> {
     dt_s: f32,
     force_per_count_n: f32,
     baseline: f32,
-    primed: bool,
     previous: i32,
     same_run: u16,
-    pre: HistoryBuf<i32, PRE_TRIGGER>,
+    pre: [i32; PRE_TRIGGER],
+    pre_next: usize,
+    pre_start: usize,
     state: State,
+    stuck_runs: u32,
     pulse: Pulse,
     next_index: u64,
     backend: M,
@@ -153,11 +161,13 @@ impl<M: Backend> Detector<M> {
             dt_s: 1.0 / fs,
             force_per_count_n: sensor.force_per_count_n,
             baseline: 0.0,
-            primed: false,
             previous: 0,
             same_run: 0,
-            pre: HistoryBuf::new(),
-            state: State::Idle,
+            pre: [0; PRE_TRIGGER],
+            pre_next: 0,
+            pre_start: 0,
+            state: State::Unprimed,
+            stuck_runs: 0,
             pulse: Pulse::EMPTY,
             next_index: 0,
             backend: M::default(),
@@ -187,46 +197,109 @@ impl<M: Backend> Detector<M> {
     /// Feeds one sample; returns a detection when a pulse ends or the sensor is found stuck.
     ///
     /// `O(1)` work and memory per sample.
-    #[inline]
+    #[inline(always)]
     pub fn feed(&mut self, sample: i32) -> Option<Detection> {
         let index = self.next_index;
         self.next_index = index.wrapping_add(1);
-        if !self.primed {
-            self.primed = true;
-            self.baseline = sample as f32;
-            self.previous = sample.wrapping_add(1);
-        }
-        let stuck = self.track_stuck(sample, index);
-        let out = match self.state {
-            State::Idle => self.idle(sample, index),
-            State::Active => self.active(sample, index),
-            State::Recovering => {
-                self.track_baseline(sample);
-                if (sample as f32 - self.baseline) <= self.release {
-                    self.pulse.below_release = self.pulse.below_release.saturating_add(1);
-                    if self.pulse.below_release >= self.hold {
-                        self.state = State::Idle;
-                    }
-                } else {
-                    self.pulse.below_release = 0;
+        let stuck = if sample == self.previous {
+            self.same_again(index)
+        } else {
+            self.previous = sample;
+            self.same_run = 0;
+            None
+        };
+        match self.state {
+            State::Idle => {
+                let v = sample as f32 - self.baseline;
+                if v > self.trigger || sample >= self.adc_max {
+                    return self.trigger(sample, index, false).or(stuck);
                 }
+                self.baseline += v * self.alpha;
+                // Ring of the last PRE_TRIGGER samples (a power of two: the mask keeps the
+                // index in bounds, so the check compiles away).
+                if let Some(slot) = self.pre.get_mut(self.pre_next & (PRE_TRIGGER - 1)) {
+                    *slot = sample;
+                }
+                self.pre_next = self.pre_next.wrapping_add(1);
+                stuck
+            }
+            State::Active => self.active(sample, index).or(stuck),
+            State::Recovering(track) => {
+                self.recover(sample, track);
+                stuck
+            }
+            State::Resumed => self.resume(sample, index).or(stuck),
+            State::Unprimed => {
+                self.prime(sample);
                 None
             }
-        };
-        out.or(stuck)
+        }
+    }
+
+    /// Feeds quiet samples from the front of `samples` for as long as nothing happens: stops
+    /// before the first sample that would trigger a pulse, complete a stuck run, or when the
+    /// detector is not idle. Returns how many samples it consumed; the state afterwards is
+    /// exactly what [`Detector::feed`] on each of them would leave. The tight loop behind
+    /// [`crate::Monitor::feed_slice`].
+    #[inline]
+    pub fn feed_quiet<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> usize {
+        if self.state != State::Idle {
+            return 0;
+        }
+        let (trigger, alpha, adc_max) = (self.trigger, self.alpha, self.adc_max);
+        // Stop before the repeat that completes a stuck run: `feed` reports it.
+        let limit = self.stuck_limit.wrapping_sub(1);
+        let (mut baseline, mut previous, mut run, mut next) =
+            (self.baseline, self.previous, self.same_run, self.pre_next);
+        let mut n = 0usize;
+        for &s in samples {
+            let x: i32 = s.into();
+            let v = x as f32 - baseline;
+            if v > trigger || x >= adc_max {
+                break;
+            }
+            if x == previous {
+                if run >= limit {
+                    break;
+                }
+                run += 1;
+            } else {
+                previous = x;
+                run = 0;
+            }
+            baseline += v * alpha;
+            if let Some(slot) = self.pre.get_mut(next & (PRE_TRIGGER - 1)) {
+                *slot = x;
+            }
+            next = next.wrapping_add(1);
+            n += 1;
+        }
+        self.baseline = baseline;
+        self.previous = previous;
+        self.same_run = run;
+        self.pre_next = next;
+        self.next_index = self.next_index.wrapping_add(n as u64);
+        n
     }
 
     /// Tells the detector that `lost` samples were dropped (e.g. a FIFO overrun). A pulse in
-    /// progress is rejected as `Gap`; the sample index advances by `lost`.
+    /// progress is rejected as `Gap` and the rest of it is skipped; a pulse already under way
+    /// when the stream resumes (the first sample is above the trigger) is rejected as `Gap`
+    /// when it ends. The sample index advances by `lost`.
     pub fn gap(&mut self, lost: u32) -> Option<Detection> {
         self.next_index = self.next_index.wrapping_add(lost as u64);
-        self.pre.clear();
+        self.pre_start = self.pre_next;
         match self.state {
             State::Active => {
-                self.state = State::Idle;
+                self.state = State::Recovering(false);
+                self.pulse.below_release = 0;
                 Some(self.reject(RejectReason::Gap))
             }
-            _ => None,
+            State::Idle => {
+                self.state = State::Resumed;
+                None
+            }
+            State::Recovering(_) | State::Resumed | State::Unprimed => None,
         }
     }
 
@@ -235,22 +308,78 @@ impl<M: Backend> Detector<M> {
         match self.state {
             State::Active => {
                 self.state = State::Idle;
+                self.pre_start = self.pre_next;
                 Some(self.reject(RejectReason::Truncated))
             }
             _ => None,
         }
     }
 
-    fn track_stuck(&mut self, sample: i32, index: u64) -> Option<Detection> {
-        if sample != self.previous {
-            self.previous = sample;
-            self.same_run = 0;
-            return None;
-        }
+    /// Runs of identical samples counted as stuck so far.
+    pub fn stuck_runs(&self) -> u32 {
+        self.stuck_runs
+    }
+
+    /// The sample repeats the previous one: a stuck run completes at `stuck_limit` repeats.
+    #[cold]
+    #[inline(never)]
+    fn same_again(&mut self, index: u64) -> Option<Detection> {
         self.same_run = self.same_run.saturating_add(1);
         if self.stuck_limit != 0 && self.same_run == self.stuck_limit {
+            self.stuck_runs = self.stuck_runs.saturating_add(1);
             return Some(Detection::Stuck { at_sample: index });
         }
+        None
+    }
+
+    /// The first [`PRE_TRIGGER`] samples set the baseline to their mean (an impact inside them
+    /// is not seen: at 100 kS/s that is the first 0.32 ms after start).
+    #[cold]
+    #[inline(never)]
+    fn prime(&mut self, sample: i32) {
+        if let Some(slot) = self.pre.get_mut(self.pre_next & (PRE_TRIGGER - 1)) {
+            *slot = sample;
+        }
+        self.pre_next = self.pre_next.wrapping_add(1);
+        if self.pre_next >= PRE_TRIGGER {
+            let sum: f32 = self.pre.iter().map(|&v| v as f32).sum();
+            self.baseline = sum / PRE_TRIGGER as f32;
+            self.pre_start = self.pre_next;
+            self.state = State::Idle;
+        }
+    }
+
+    /// After a pulse that ran too long or was cut by a gap: wait for `hold` samples below the
+    /// release level. After a pulse that ran too long the baseline is tracked 16 times faster
+    /// than when idle (a DC step is followed within about `tau / 16`); after a gap it is frozen.
+    #[cold]
+    #[inline(never)]
+    fn recover(&mut self, sample: i32, track: bool) {
+        if track {
+            let fast = (16.0 * self.alpha).min(1.0);
+            self.baseline += (sample as f32 - self.baseline) * fast;
+        }
+        if (sample as f32 - self.baseline) <= self.release {
+            self.pulse.below_release = self.pulse.below_release.saturating_add(1);
+            if self.pulse.below_release >= self.hold {
+                self.state = State::Idle;
+                self.pre_start = self.pre_next;
+            }
+        } else {
+            self.pulse.below_release = 0;
+        }
+    }
+
+    /// First sample after a gap: a pulse already above the trigger lost its start.
+    #[cold]
+    #[inline(never)]
+    fn resume(&mut self, sample: i32, index: u64) -> Option<Detection> {
+        self.state = State::Idle;
+        let v = sample as f32 - self.baseline;
+        if v > self.trigger || sample >= self.adc_max {
+            return self.trigger(sample, index, true);
+        }
+        self.track_baseline(sample);
         None
     }
 
@@ -258,28 +387,27 @@ impl<M: Backend> Detector<M> {
         self.baseline += (sample as f32 - self.baseline) * self.alpha;
     }
 
-    #[inline]
-    fn idle(&mut self, sample: i32, index: u64) -> Option<Detection> {
-        let v = sample as f32 - self.baseline;
-        if v <= self.trigger && sample < self.adc_max {
-            self.track_baseline(sample);
-            self.pre.write(sample);
-            return None;
-        }
-        // Trigger: start the pulse with the pre-trigger samples.
+    /// Starts a pulse with the pre-trigger samples, oldest first.
+    #[cold]
+    #[inline(never)]
+    fn trigger(&mut self, sample: i32, index: u64, after_gap: bool) -> Option<Detection> {
         let mut p = Pulse::EMPTY;
-        for &s in self.pre.oldest_ordered() {
-            let w = s as f32 - self.baseline;
+        let len = self.pre_next.wrapping_sub(self.pre_start).min(PRE_TRIGGER);
+        let first = self.pre_next.wrapping_sub(len);
+        for k in 0..len {
+            let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
+            let w = self.pre.get(i).copied().unwrap_or(0) as f32 - self.baseline;
             p.samples += 1;
             p.sum += w;
             p.last = w;
         }
-        self.pre.clear();
+        p.after_gap = after_gap;
         self.pulse = p;
         self.state = State::Active;
         self.active(sample, index)
     }
 
+    #[inline(never)]
     fn active(&mut self, sample: i32, index: u64) -> Option<Detection> {
         let v = sample as f32 - self.baseline;
         let p = &mut self.pulse;
@@ -320,10 +448,11 @@ impl<M: Backend> Detector<M> {
         }
         if p.below_release >= self.hold {
             self.state = State::Idle;
+            self.pre_start = self.pre_next;
             return Some(self.measure());
         }
         if p.samples > self.max_samples {
-            self.state = State::Recovering;
+            self.state = State::Recovering(true);
             self.pulse.below_release = 0;
             return Some(self.reject(RejectReason::TooLong));
         }
@@ -338,6 +467,8 @@ impl<M: Backend> Detector<M> {
     }
 
     /// Peak and duration of the finished pulse (see the module docs for the method).
+    #[cold]
+    #[inline(never)]
     fn measure(&self) -> Detection {
         let p = &self.pulse;
         let at_sample = p.max_at;
@@ -355,6 +486,9 @@ impl<M: Backend> Detector<M> {
         };
         if p.above_trigger <= 1 && neighbour < 0.2 * p.max {
             return reject(RejectReason::Spike);
+        }
+        if p.after_gap {
+            return reject(RejectReason::Gap);
         }
         if p.pileup {
             return reject(RejectReason::PileUp);
@@ -393,20 +527,19 @@ pub fn shape_fit<M: Backend>(y0: f32, before: f32, after: f32, sum: f32) -> Opti
     if !(y0 > 0.0 && sum > 0.0 && y0.is_finite() && sum.is_finite()) {
         return None;
     }
-    let z = |y: f32| {
-        if y > 0.0 { M::powf(y, 2.0 / 3.0) } else { 0.0 }
-    };
+    let z = |y: f32| if y > 0.0 { M::pow_2_3(y) } else { 0.0 };
     let (z0, za, zb) = (z(y0), z(before.min(y0)), z(after.min(y0)));
     let mut peak = y0;
     let mut duration = sum / (C_AREA * peak);
     for _ in 0..3 {
-        let d = core::f32::consts::PI / duration;
-        let half = 0.5 * d.min(core::f32::consts::FRAC_PI_2);
-        let b_max = z0 / math::cos(half);
+        // Phase step per sample; a pulse shorter than one sample is clamped to one.
+        let d = (core::f32::consts::PI / duration).min(core::f32::consts::PI);
+        let (sh, ch) = math::sin_cos(0.5 * d.min(core::f32::consts::FRAC_PI_2));
+        let b_max = z0 / ch;
         let b = if d >= 0.3 {
-            let (s, c) = (math::sin(d), math::cos(d));
+            let (s, c) = math::sin_cos(d);
             let r = za.max(zb) / z0;
-            let t = ((r - c) / s).clamp(0.0, math::sin(half) / math::cos(half));
+            let t = ((r - c) / s).max(0.0).min(sh / ch);
             z0 * M::sqrt(1.0 + t * t)
         } else {
             let curv = za - 2.0 * z0 + zb;
@@ -417,7 +550,7 @@ pub fn shape_fit<M: Backend>(y0: f32, before: f32, after: f32, sum: f32) -> Opti
                 z0
             }
         };
-        peak = M::pow_3_2(b.clamp(z0, b_max));
+        peak = M::pow_3_2(b.max(z0).min(b_max));
         duration = sum / (C_AREA * peak);
     }
     if peak.is_finite() && duration.is_finite() && duration > 0.0 {

@@ -75,6 +75,35 @@ pub struct Envelope {
     pub ln_speed: (f32, f32),
     /// Speed prior exponent `beta`: `p(ln u) ~ e^(beta ln u)`.
     pub speed_beta: f32,
+    /// `ln` of the constant part of the prior density in `(ln F, ln t)`:
+    /// `-ln(x1 - x0) - ln(8/5) + ln(beta / (e^(beta y1) (1 - e^(beta (y0 - y1)))))`
+    /// (`-ln(y1 - y0)` in place of the last term for `beta = 0`).
+    pub ln_normalizer: f32,
+}
+
+/// Measurement noise carried from `(ln F_max, ln t_c)` into `(x, y) = (ln R, ln u)` as
+/// independent standard deviations: `sigma_x^2 = sF^2 / 64 + 9 sT^2 / 16`,
+/// `sigma_y^2 = (sF^2 + 4 sT^2) / 2.56` (from `x = ln F / 8 + 3 ln t / 4 + c`,
+/// `y = 5 ln F / 8 - 5 ln t / 4 + c`), each at least `1e-4`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NoiseXy {
+    /// Standard deviation of `ln R`.
+    pub sigma_x: f32,
+    /// Standard deviation of `ln u`.
+    pub sigma_y: f32,
+}
+
+impl NoiseXy {
+    /// From the standard deviations of `ln F_max` and `ln t_c`.
+    pub fn new<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32) -> Self {
+        let f2 = sigma_ln_force * sigma_ln_force;
+        let t2 = sigma_ln_duration * sigma_ln_duration;
+        Self {
+            sigma_x: clamp_sigma(M::sqrt(f2 / 64.0 + 0.5625 * t2)),
+            sigma_y: clamp_sigma(M::sqrt((f2 + 4.0 * t2) / (JACOBIAN * JACOBIAN))),
+        }
+    }
 }
 
 /// Where an observation maps in a class's `(ln R, ln u)` plane.
@@ -110,13 +139,36 @@ impl Envelope {
         let u = speed_m_s.checked("speed_m_s")?;
         let ln_e = M::ln(e);
         let ln_rho = M::ln(5.0 * core::f32::consts::PI / 4.0 * rho);
+        let (x0, x1) = (M::ln(r.min), M::ln(r.max));
+        let (y0, y1) = (M::ln(u.min), M::ln(u.max));
+        // A range narrower than f32 resolves in log space would divide by zero below.
+        if x1 - x0 < 1e-4 {
+            return Err(Error::OutOfRange(
+                "radius_m (range narrower than 1e-4 relative)",
+            ));
+        }
+        if y1 - y0 < 1e-4 {
+            return Err(Error::OutOfRange(
+                "speed_m_s (range narrower than 1e-4 relative)",
+            ));
+        }
+        let b = speed_beta;
+        let ln_py = if b.abs() < 1e-6 {
+            -M::ln(y1 - y0)
+        } else {
+            M::ln(b / (1.0 - M::exp(b * (y0 - y1)))) - b * y1
+        };
         let env = Self {
             ln_force_coeff: M::ln(4.0 / 3.0) + 0.4 * ln_e + 0.6 * ln_rho,
             ln_duration_coeff: M::ln(CONTACT_TIME_FACTOR) + 0.4 * (ln_rho - ln_e),
-            ln_radius: (M::ln(r.min), M::ln(r.max)),
-            ln_speed: (M::ln(u.min), M::ln(u.max)),
+            ln_radius: (x0, x1),
+            ln_speed: (y0, y1),
             speed_beta,
+            ln_normalizer: -M::ln(x1 - x0) - M::ln(JACOBIAN) + ln_py,
         };
+        if !env.ln_normalizer.is_finite() {
+            return Err(Error::Unrepresentable("prior density"));
+        }
         // Every corner must give a peak force and duration that f32 carries.
         for (x, y) in env.corners() {
             let (lf, lt) = env.forward(x, y);
@@ -186,25 +238,23 @@ impl Envelope {
         self.speed_density::<M>(y) / (x1 - x0) / JACOBIAN
     }
 
-    /// Log-likelihood of a noisy observation `(ln F_max, ln t_c)` with standard deviations
-    /// `sigma_ln_force`, `sigma_ln_duration`: the class density convolved with the noise,
-    /// with the noise carried to `(x, y)` as independent
-    /// `sigma_x^2 = sF^2 / 64 + 9 sT^2 / 16`, `sigma_y^2 = (sF^2 + 4 sT^2) / 2.56`:
+    /// Log-likelihood of a noisy observation `(ln F_max, ln t_c)`: the class density
+    /// convolved with the noise, the noise taken as independent in `(x, y)` ([`NoiseXy`]):
     ///
     /// `L = [Phi((x - x0)/sx) - Phi((x - x1)/sx)] / (x1 - x0) / 1.6
     ///      * beta e^(beta (y - y1) + beta^2 sy^2 / 2) / (1 - e^(beta (y0 - y1)))
-    ///      * [Phi((y1 - y - beta sy^2)/sy) - Phi((y0 - y - beta sy^2)/sy)]`.
+    ///      * [Phi((y1 - y - beta sy^2)/sy) - Phi((y0 - y - beta sy^2)/sy)]`
     ///
-    /// `-inf` when the observation is so far outside that f32 rounds the likelihood to zero.
+    /// (the constant factors are [`Envelope::ln_normalizer`]). `-inf` when the observation is so
+    /// far outside that f32 rounds the likelihood to zero.
     pub fn ln_likelihood<M: Backend>(
         &self,
         ln_force: f32,
         ln_duration: f32,
-        sigma_ln_force: f32,
-        sigma_ln_duration: f32,
+        noise: NoiseXy,
     ) -> f32 {
         let (x, y) = self.invert_ln(ln_force, ln_duration);
-        let (sx, sy) = sigmas_xy::<M>(sigma_ln_force, sigma_ln_duration);
+        let (sx, sy) = (noise.sigma_x, noise.sigma_y);
         let (x0, x1) = self.ln_radius;
         let (y0, y1) = self.ln_speed;
         let ix = math::normal_cdf((x - x0) / sx) - math::normal_cdf((x - x1) / sx);
@@ -214,39 +264,18 @@ impl Envelope {
         if ix <= 0.0 || iy <= 0.0 {
             return f32::NEG_INFINITY;
         }
-        let ln_py = if b.abs() < 1e-6 {
-            -M::ln(y1 - y0)
-        } else {
-            M::ln(b / (1.0 - M::exp(b * (y0 - y1)))) + b * (y - y1) + 0.5 * b * shift
-        };
-        M::ln(ix) - M::ln(x1 - x0) - M::ln(JACOBIAN) + ln_py + M::ln(iy)
+        M::ln(ix * iy) + self.ln_normalizer + b * y + 0.5 * b * shift
     }
 
-    /// Standardised distance of an observation outside the class's box:
-    /// `sqrt(dx^2 + dy^2)` with `dx` the distance of `x = ln R` outside `[x0, x1]` in units of
+    /// Squared standardised distance of an observation outside the class's box:
+    /// `dx^2 + dy^2` with `dx` the distance of `x = ln R` outside `[x0, x1]` in units of
     /// `sigma_x` (0 inside), likewise `dy`.
-    pub fn outside_sigmas<M: Backend>(
-        &self,
-        ln_force: f32,
-        ln_duration: f32,
-        sigma_ln_force: f32,
-        sigma_ln_duration: f32,
-    ) -> f32 {
+    pub fn outside_sigmas_squared(&self, ln_force: f32, ln_duration: f32, noise: NoiseXy) -> f32 {
         let (x, y) = self.invert_ln(ln_force, ln_duration);
-        let (sx, sy) = sigmas_xy::<M>(sigma_ln_force, sigma_ln_duration);
-        let dx = outside(x, self.ln_radius) / sx;
-        let dy = outside(y, self.ln_speed) / sy;
-        M::sqrt(dx * dx + dy * dy)
+        let dx = outside(x, self.ln_radius) / noise.sigma_x;
+        let dy = outside(y, self.ln_speed) / noise.sigma_y;
+        dx * dx + dy * dy
     }
-}
-
-/// Noise carried from `(ln F, ln t)` to `(x, y) = (ln R, ln u)`, each at least `1e-4`.
-fn sigmas_xy<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32) -> (f32, f32) {
-    let f2 = sigma_ln_force * sigma_ln_force;
-    let t2 = sigma_ln_duration * sigma_ln_duration;
-    let sx = M::sqrt(f2 / 64.0 + 0.5625 * t2);
-    let sy = M::sqrt((f2 + 4.0 * t2) / (JACOBIAN * JACOBIAN));
-    (clamp_sigma(sx), clamp_sigma(sy))
 }
 
 /// `MIN_SIGMA` for NaN or tiny values.

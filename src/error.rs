@@ -43,14 +43,16 @@ impl core::fmt::Display for Error {
 
 impl core::error::Error for Error {}
 
-/// `Ok(x)` when `x` is finite and `> 0`, else the matching [`Error`] naming `what`.
+/// `Ok(x)` when `x` is finite, `> 0` and inside [`REPRESENTABLE`], else the matching
+/// [`Error`] naming `what` (a subnormal or absurdly large input would make the closed forms
+/// lose their f32 precision silently).
 pub(crate) fn positive(x: f32, what: &'static str) -> Result<f32, Error> {
     if !x.is_finite() {
         Err(Error::NonFinite(what))
     } else if x <= 0.0 {
         Err(Error::NonPositive(what))
     } else {
-        Ok(x)
+        representable(x, what)
     }
 }
 

@@ -51,34 +51,69 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
     }
 
     /// Feeds one ADC sample; returns an event when a pulse ends or the sensor is stuck.
-    #[inline]
+    #[inline(always)]
     pub fn feed(&mut self, sample: i32) -> Option<Event> {
-        self.counters.samples = self.counters.samples.saturating_add(1);
         let d = self.detector.feed(sample)?;
         Some(self.handle(d))
+    }
+
+    /// Feeds a block of samples (e.g. one accelerometer FIFO read), calling `on_event` for
+    /// every event in order. The same result as [`Monitor::feed`] on each sample, with the
+    /// per-call overhead paid once per block (see the README for the instruction counts).
+    pub fn feed_slice<S: Copy + Into<i32>>(
+        &mut self,
+        samples: &[S],
+        mut on_event: impl FnMut(Event),
+    ) {
+        let mut rest = samples;
+        loop {
+            let quiet = self.detector.feed_quiet(rest);
+            rest = rest.get(quiet..).unwrap_or(&[]);
+            let Some((&s, tail)) = rest.split_first() else {
+                return;
+            };
+            if let Some(d) = self.detector.feed(s.into()) {
+                on_event(self.handle(d));
+            }
+            rest = tail;
+        }
     }
 
     /// Reports `lost` dropped samples (see [`Detector::gap`]).
     pub fn gap(&mut self, lost: u32) -> Option<Event> {
         self.counters.gaps = self.counters.gaps.saturating_add(1);
         self.counters.lost_samples = self.counters.lost_samples.saturating_add(lost as u64);
-        self.counters.samples = self.counters.samples.saturating_add(lost as u64);
-        let d = self.detector.gap(lost)?;
-        Some(self.handle(d))
+        let d = self.detector.gap(lost);
+        self.sync();
+        Some(self.handle(d?))
     }
 
     /// Ends the stream (a pulse in progress is rejected as truncated).
     pub fn finish(&mut self) -> Option<Event> {
-        let d = self.detector.finish()?;
-        Some(self.handle(d))
+        let d = self.detector.finish();
+        self.sync();
+        Some(self.handle(d?))
     }
 
+    /// Samples fed so far, including those reported lost (always current, unlike
+    /// `counters().samples`, which is brought up to date at each event, gap and finish so the
+    /// quiet path stays short).
+    pub fn samples_fed(&self) -> u64 {
+        self.detector.samples_fed()
+    }
+
+    /// Brings the counters the detector keeps (samples, stuck runs) into `counters`.
+    fn sync(&mut self) {
+        self.counters.samples = self.detector.samples_fed();
+        self.counters.stuck_runs = self.detector.stuck_runs();
+    }
+
+    #[cold]
+    #[inline(never)]
     fn handle(&mut self, d: Detection) -> Event {
+        self.sync();
         match d {
-            Detection::Stuck { at_sample } => {
-                self.counters.stuck_runs = self.counters.stuck_runs.saturating_add(1);
-                Event::Stuck { at_sample }
-            }
+            Detection::Stuck { at_sample } => Event::Stuck { at_sample },
             Detection::Pulse { at_sample, outcome } => {
                 let (verdict, measurement) = match outcome {
                     Ok(m) => (self.scene.classify(&m), Some(m)),

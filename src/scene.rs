@@ -272,6 +272,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             let _ = ln_priors.push(M::ln(prior));
             let _ = stored.push(c.clone());
         }
+        // Priors relative to the largest, so that exp(ln prior) stays in (0, 1] whatever their
+        // scale (1e-30 or 1e30 alike).
+        let top = ln_priors.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+        for lp in ln_priors.iter_mut() {
+            *lp -= top;
+        }
         if shortest * sensor.sample_rate_hz < 1.0 {
             return Err(Error::OutOfRange(
                 "sample_rate_hz (shortest pulse < 1 sample)",
@@ -312,7 +318,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         &self.envelopes
     }
 
-    /// `ln` of each class's prior weight.
+    /// `ln` of each class's prior weight relative to the largest (so the largest is 0).
     pub fn ln_priors(&self) -> &[f32] {
         &self.ln_priors
     }

@@ -156,3 +156,38 @@ fn streaming_detector_over_rates() {
         assert!(ed < dur_bound, "rate {rate}: duration error {ed}");
     }
 }
+
+#[test]
+fn feed_slice_gives_the_same_events_as_feed() {
+    use coalshock::Monitor;
+    let s = scene(100_000.0, 4.0);
+    let mut rng = Noise(7);
+    let stream: Vec<i16> = (0..20_000)
+        .map(|i| {
+            let t = i as f64 / 100_000.0;
+            let y = hertz_pulse(t % 0.02, 0.01, 150e-6, 1500.0) + 4.0 * rng.gauss();
+            // A stuck stretch (100 identical samples) in the middle.
+            if (12_000..12_100).contains(&i) {
+                3
+            } else {
+                y.round() as i16
+            }
+        })
+        .collect();
+    let mut one = Monitor::new(s.clone());
+    let a: Vec<_> = stream.iter().filter_map(|&x| one.feed(x as i32)).collect();
+    let mut block = Monitor::new(s);
+    let mut b = Vec::new();
+    for chunk in stream.chunks(512) {
+        block.feed_slice(chunk, |e| b.push(e));
+    }
+    assert_eq!(a.len(), 11, "{a:?}");
+    assert_eq!(
+        a.iter()
+            .filter(|e| matches!(e, coalshock::Event::Stuck { .. }))
+            .count(),
+        1
+    );
+    assert_eq!(a, b);
+    assert_eq!(one.samples_fed(), block.samples_fed());
+}

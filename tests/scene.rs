@@ -1,11 +1,14 @@
 //! Scene build: presets, separability against an independent Monte Carlo, bad input.
 
-use coalshock::{Error, Material, ParticleClass, Range, Scene, SensorChain, Settings, Speed};
+use coalshock::{Material, Scene};
+
+/// A class for the Monte Carlo: material, radius range (m), speed range (m/s).
+type McClass = (Material, (f64, f64), (f64, f64));
 
 /// Independent f64 Monte Carlo of the noiseless Bayes error of two classes with log-uniform R
 /// and uniform u: draws (R, u) from each class, computes (F_max, t_c) with the textbook
 /// formulas, and checks whether the other class's prior density there is larger.
-fn bayes_error_mc(classes: &[(Material, (f64, f64), (f64, f64))], plate: Material, n: usize) -> f64 {
+fn bayes_error_mc(classes: &[McClass], plate: Material, n: usize) -> f64 {
     let e_star = |m: &Material| {
         let c = |m: &Material| (1.0 - (m.poisson as f64).powi(2)) / m.modulus_pa as f64;
         1.0 / (c(m) + c(&plate))
@@ -15,8 +18,10 @@ fn bayes_error_mc(classes: &[(Material, (f64, f64), (f64, f64))], plate: Materia
         let (m, (r0, r1), (u0, u1)) = &classes[j];
         let e = e_star(m);
         let rho = m.density_kg_m3 as f64;
-        let cf = (4.0 / 3.0 * e.powf(0.4) * (5.0 * std::f64::consts::PI * rho / 4.0).powf(0.6)).ln();
-        let ct = (2.943_275_184_324_7 * (5.0 * std::f64::consts::PI * rho / (4.0 * e)).powf(0.4)).ln();
+        let cf =
+            (4.0 / 3.0 * e.powf(0.4) * (5.0 * std::f64::consts::PI * rho / 4.0).powf(0.6)).ln();
+        let ct =
+            (2.943_275_184_324_7 * (5.0 * std::f64::consts::PI * rho / (4.0 * e)).powf(0.4)).ln();
         let (a, b) = (lf - cf, lt - ct);
         let y = (a - 2.0 * b) / 1.6;
         let x = b + 0.2 * y;
@@ -66,7 +71,10 @@ fn paper_scene_bayes_error_matches_monte_carlo() {
         Material::CARBON_STEEL,
         200_000,
     );
-    println!("paper: kernel bayes {:.4} overlap {:.4}; monte carlo {:.4}", s.bayes_error, s.overlap_share, mc);
+    println!(
+        "paper: kernel bayes {:.4} overlap {:.4}; monte carlo {:.4}",
+        s.bayes_error, s.overlap_share, mc
+    );
     assert!((s.bayes_error as f64 - mc).abs() < 0.01);
     // physics notes: about 24 % of impacts are ambiguous even without noise.
     assert!((0.22..0.26).contains(&mc), "{mc}");
