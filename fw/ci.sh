@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Everything CI does for the firmware, in one script:
+#   1. fw/install.sh (targets, llvm-tools, qemu-system-arm, defmt-print; skips what is present);
+#   2. fw/measure.sh: builds the firmware, runs it in QEMU (Cortex-M4F), measures flash, RAM,
+#      stack and instructions, checks for kernel panic paths and enforces fw/budgets.txt;
+#      also builds for Cortex-M0 and M33 and runs the M0 build (report only);
+#   3. host replay: `cargo run --example node` on the host prints the verdict lines the kernel
+#      gives for examples/data/paper_stream.bin (this builds the package's host
+#      dev-dependencies, as `cargo test` does);
+#   4. compares the node's pulse/stuck/classified/counters lines with the host's: they must be
+#      identical (same f32 arithmetic on both).
+# Exit status 0 only when all of it passes. Outputs: <cargo target dir>/fw (or $FW_OUT).
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+start=$SECONDS
+section() { printf '\n==== %s (%ds)\n' "$*" "$((SECONDS - start))"; }
+
+section "install"
+fw/install.sh
+
+target_dir=$(cargo metadata --format-version 1 --no-deps \
+    | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
+out=${FW_OUT:-$target_dir/fw}
+export FW_OUT=$out
+mkdir -p "$out"
+
+stream=examples/data/paper_stream.bin
+if [ ! -s "$stream" ] || [ $(( $(stat -c %s "$stream") % 2 )) != 0 ]; then
+    echo "$stream missing or not a whole number of i16 samples" >&2
+    exit 1
+fi
+
+status=0
+section "firmware: build, run, measure, budgets (fw/measure.sh)"
+fw/measure.sh || status=$?
+
+section "host replay (cargo run --example node)"
+rm -f "$out/host.txt"
+if cargo run --quiet --example node > "$out/host.txt"; then
+    echo "$(grep -c '^pulse ' "$out/host.txt") pulse lines on the host"
+else
+    echo "host replay FAILED"
+    status=1
+fi
+
+section "compare node with host"
+lines='^(pulse|stuck|classified|counters) '
+if [ ! -s "$out/node.txt" ] || [ ! -s "$out/host.txt" ]; then
+    echo "nothing to compare (node or host output missing)"
+    status=1
+elif diff -u <(grep -E "$lines" "$out/host.txt") <(grep -E "$lines" "$out/node.txt") \
+        > "$out/compare.diff"; then
+    echo "node and host agree on all $(grep -cE "$lines" "$out/host.txt") lines"
+else
+    echo "node and host DIFFER:"
+    head -40 "$out/compare.diff"
+    status=1
+fi
+
+section "done: status $status"
+exit "$status"

@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# Builds the node firmware (examples/node.rs), runs it in QEMU, measures it and checks the
+# budgets of fw/budgets.txt. Exit status 0 only when the firmware ran to a successful exit and
+# every budget holds.
+#
+# Measured (Cortex-M4F, thumbv7em-none-eabihf, QEMU netduinoplus2 with -icount shift=0):
+#   - flash and static RAM of the release ELF (llvm-size), also without the replayed stream;
+#   - what the firmware reports on its `measure` lines: kernel RAM (size_of), stack
+#     high-water marks, instructions per quiet sample / per pulse / for building the scene;
+#   - panic sites of the kernel left in the linked image (fw/nopanic.py).
+# Also reported, not budgeted: the kernel built for thumbv6m-none-eabi (Cortex-M0/M0+) and
+# thumbv8m.main-none-eabihf (Cortex-M33), and the same firmware's figures on a Cortex-M0 core
+# (QEMU `-cpu cortex-m0` on the same machine: ARMv6-M instructions, no FPU).
+#
+# Outputs go to $FW_OUT (default: <cargo target dir>/fw): node.txt (decoded node output),
+# measures.txt (every figure as `key value`), nopanic.txt, budget.md, and the same for M0.
+# Environment: FW_SKIP_M0=1 skips the Cortex-M0 build and run.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+root=$(pwd)
+host=$(rustc -vV | sed -n 's/^host: //p')
+tools="$(rustc --print sysroot)/lib/rustlib/$host/bin"
+target_dir=$(cargo metadata --format-version 1 --no-deps \
+    | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
+out=${FW_OUT:-$target_dir/fw}
+mkdir -p "$out"
+stream=examples/data/paper_stream.bin
+
+section() { printf '\n== %s\n' "$*"; }
+
+# Flash and static RAM of an ELF from its allocated sections (llvm-size -A): flash is
+# everything loaded below 0x2000_0000 plus the .data initialisers, RAM is .data, .bss and
+# .uninit. Appends `<prefix>flash_bytes`, `<prefix>static_ram_bytes` and (for the node)
+# `<prefix>flash_code_bytes` (flash without the replayed stream) to measures.txt.
+sizes() {
+    local elf=$1 prefix=$2
+    "$tools/llvm-size" -A "$elf" | python3 -c '
+import sys
+prefix, stream = sys.argv[1], int(sys.argv[2])
+flash = ram = 0
+for line in sys.stdin:
+    p = line.split()
+    if len(p) != 3 or not p[1].isdigit() or not p[2].isdigit():
+        continue
+    name, size, addr = p[0], int(p[1]), int(p[2])
+    if addr == 0 or size == 0:
+        continue  # debug info, .defmt (not loaded)
+    if addr >= 0x20000000:
+        ram += size
+        if name == ".data":
+            flash += size
+    else:
+        flash += size
+print(f"{prefix}flash_bytes {flash}")
+print(f"{prefix}flash_code_bytes {flash - stream}")
+print(f"{prefix}static_ram_bytes {ram}")
+' "$prefix" "$(stat -c %s "$stream")"
+}
+
+: > "$out/measures.txt"
+status=0
+
+section "build: node firmware, thumbv7em-none-eabihf (Cortex-M4F)"
+cargo build --release --target thumbv7em-none-eabihf --example node
+elf="$target_dir/thumbv7em-none-eabihf/release/examples/node"
+
+section "run: QEMU netduinoplus2, -icount shift=0"
+if fw/run.sh "$elf" > "$out/node.txt"; then
+    echo "node exited with success ($(grep -c '^pulse ' "$out/node.txt") pulse lines)"
+else
+    rc=$?
+    echo "node FAILED (status $rc); its output:"
+    cat "$out/node.txt"
+    status=1
+fi
+sed -n 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/\1 \2/p' "$out/node.txt" >> "$out/measures.txt"
+
+section "size: llvm-size"
+"$tools/llvm-size" -A "$elf" | awk '$3 != 0 && $2 != 0'
+sizes "$elf" "" | tee -a "$out/measures.txt"
+echo "stream_bytes $(stat -c %s "$stream")" | tee -a "$out/measures.txt"
+
+section "panic paths: fw/nopanic.py"
+set +e
+python3 fw/nopanic.py --objdump "$tools/llvm-objdump" --package-src "$root/src" "$elf" \
+    > "$out/nopanic.txt"
+set -e
+cat "$out/nopanic.txt"
+sed -n 's/^nopanic: \([0-9]*\) kernel panic site(s), \([0-9]*\) elsewhere$/nopanic_kernel_sites \1\nnopanic_other_sites \2/p' \
+    "$out/nopanic.txt" >> "$out/measures.txt"
+
+section "other cores: the kernel alone"
+for t in thumbv6m-none-eabi thumbv8m.main-none-eabihf; do
+    cargo build -p coalshock --release --target "$t"
+done
+echo "kernel builds for thumbv6m-none-eabi and thumbv8m.main-none-eabihf"
+
+if [ "${FW_SKIP_M0:-0}" != 1 ]; then
+    section "Cortex-M0 (thumbv6m-none-eabi): same firmware, QEMU -cpu cortex-m0 (report only)"
+    cargo build --release --target thumbv6m-none-eabi --example node
+    elf0="$target_dir/thumbv6m-none-eabi/release/examples/node"
+    sizes "$elf0" "m0_" | tee -a "$out/measures.txt"
+    if FW_CPU=cortex-m0 fw/run.sh "$elf0" > "$out/node-m0.txt"; then
+        sed -n 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/m0_\1 \2/p' "$out/node-m0.txt" \
+            >> "$out/measures.txt"
+        if diff <(grep -E '^(pulse|stuck|classified|counters) ' "$out/node.txt") \
+                <(grep -E '^(pulse|stuck|classified|counters) ' "$out/node-m0.txt") > /dev/null; then
+            echo "m0_matches_m4 1" >> "$out/measures.txt"
+            echo "Cortex-M0 verdicts identical to Cortex-M4F"
+        else
+            echo "m0_matches_m4 0" >> "$out/measures.txt"
+            echo "Cortex-M0 verdicts DIFFER from Cortex-M4F (report only)"
+        fi
+        grep -E '^m0_(kernel_ram|stack_kernel|insns_)' "$out/measures.txt" || true
+    else
+        echo "Cortex-M0 run failed (report only):"
+        cat "$out/node-m0.txt"
+    fi
+    cargo build --release --target thumbv8m.main-none-eabihf --example node
+    sizes "$target_dir/thumbv8m.main-none-eabihf/release/examples/node" "m33_" \
+        | tee -a "$out/measures.txt"
+fi
+
+section "figures ($out/measures.txt)"
+cat "$out/measures.txt"
+
+section "budgets (fw/budgets.txt)"
+if ! python3 fw/budget.py fw/budgets.txt "$out/measures.txt" "$out/budget.md"; then
+    status=1
+fi
+exit "$status"
