@@ -2,7 +2,13 @@
 //! model and contact integrator used to generate and check pulses.
 
 pub mod bayes;
+pub mod convert;
 pub mod hertz64;
 pub mod impact;
+pub mod impact_cli;
 pub mod integrate;
 pub mod laws;
+pub mod paper;
+pub mod scene;
+pub mod sensor;
+pub mod stream;

@@ -1,0 +1,233 @@
+//! The one place where host values (`f64`, [`crate::scene`]) become the kernel's `f32` types
+//! and back. Every `f64 -> f32` cast rounds to nearest; the kernel then checks the values
+//! (a value beyond the f32 range becomes infinite and the kernel refuses it by name).
+
+use coalshock::math::Backend;
+use coalshock::scene::DEFAULT_CLASSES;
+use coalshock::{Material, Measurement, ParticleClass, Range, Scene, SensorChain, Settings, Speed};
+
+use crate::hertz64::Material64;
+use crate::scene::{ClassSpec, Range64, SceneFile, SensorSpec, SettingsOverrides, SpeedSpec};
+
+/// Why a scene file could not become a kernel scene.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConvertError {
+    /// The kernel refused the scene (its message names the parameter).
+    #[error("the kernel refused the scene: {0}")]
+    Kernel(coalshock::Error),
+    /// More classes than the kernel scene's capacity `N`.
+    #[error("the scene has {classes} classes; this kernel scene holds at most {capacity}")]
+    TooManyClasses {
+        /// Classes in the file.
+        classes: usize,
+        /// Capacity of the kernel scene type.
+        capacity: usize,
+    },
+}
+
+/// `Material64` (f64) -> kernel `Material` (f32): density kg/m^3, modulus Pa, Poisson's ratio.
+pub fn material_to_kernel(m: &Material64) -> Material {
+    Material::new(
+        m.density_kg_m3 as f32,
+        m.modulus_pa as f32,
+        m.poisson as f32,
+    )
+}
+
+/// Kernel `Material` (f32) -> `Material64` (f64), exact.
+pub fn material_from_kernel(m: &Material) -> Material64 {
+    Material64 {
+        density_kg_m3: m.density_kg_m3 as f64,
+        modulus_pa: m.modulus_pa as f64,
+        poisson: m.poisson as f64,
+    }
+}
+
+/// `[min, max]` (f64) -> kernel `Range` (f32), same unit.
+pub fn range_to_kernel(r: &Range64) -> Range {
+    Range::new(r.min as f32, r.max as f32)
+}
+
+/// Kernel `Range` (f32) -> [`Range64`], exact.
+pub fn range_from_kernel(r: &Range) -> Range64 {
+    Range64::new(r.min as f64, r.max as f64)
+}
+
+/// A class of a scene file -> kernel `ParticleClass` (name, material, radius range in m,
+/// speed in m/s or drop height in m, prior weight).
+pub fn class_to_kernel(c: &ClassSpec) -> ParticleClass {
+    let speed = match c.speed {
+        SpeedSpec::Uniform(s) => Speed::Uniform(range_to_kernel(&s)),
+        SpeedSpec::DropHeight(h) => Speed::DropHeight(range_to_kernel(&h)),
+    };
+    let mut k = ParticleClass::new(
+        &c.name,
+        material_to_kernel(&c.material.material()),
+        range_to_kernel(&c.radius_m),
+        speed,
+    );
+    k.prior = c.prior as f32;
+    k
+}
+
+/// The sensor chain the kernel inverts: `SensorChain::from_plate(f_s, M, S, noise, bits)`,
+/// i.e. `force_per_count_n = M / S` (N per count) and the ADC range of `bits`. Only the rigid
+/// part is carried: the kernel does not model resonances, modes, offset or drift.
+pub fn sensor_to_kernel(s: &SensorSpec) -> SensorChain {
+    SensorChain::from_plate(
+        s.sample_rate_hz as f32,
+        s.effective_mass_kg as f32,
+        s.counts_per_m_s2 as f32,
+        s.noise_rms_counts as f32,
+        s.adc_bits,
+    )
+}
+
+/// The kernel's default `Settings` with the file's overrides applied.
+pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
+    let mut s = Settings::default();
+    let set = |dst: &mut f32, v: Option<f64>| {
+        if let Some(v) = v {
+            *dst = v as f32;
+        }
+    };
+    set(&mut s.trigger_sigmas, o.trigger_sigmas);
+    set(&mut s.release_sigmas, o.release_sigmas);
+    set(&mut s.baseline_tau_s, o.baseline_tau_s);
+    set(&mut s.model_sigma, o.model_sigma);
+    set(&mut s.confidence, o.confidence);
+    set(&mut s.out_sigmas, o.out_sigmas);
+    if let Some(v) = o.hold_samples {
+        s.hold_samples = v;
+    }
+    if let Some(v) = o.stuck_samples {
+        s.stuck_samples = v;
+    }
+    if let Some(v) = o.separability_grid {
+        s.separability_grid = v;
+    }
+    s
+}
+
+/// A scene file -> the kernel scene with the default capacity and backend, via `Scene::new`.
+pub fn scene_to_kernel(scene: &SceneFile) -> Result<Scene, ConvertError> {
+    scene_to_kernel_in::<DEFAULT_CLASSES, coalshock::math::DefaultBackend>(scene)
+}
+
+/// [`scene_to_kernel`] with capacity `N` and math backend `M`.
+pub fn scene_to_kernel_in<const N: usize, M: Backend>(
+    scene: &SceneFile,
+) -> Result<Scene<N, M>, ConvertError> {
+    if scene.classes.len() > N {
+        return Err(ConvertError::TooManyClasses {
+            classes: scene.classes.len(),
+            capacity: N,
+        });
+    }
+    let classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
+    Scene::new(
+        material_to_kernel(&scene.plate.material()),
+        &classes,
+        sensor_to_kernel(&scene.sensor),
+        settings_to_kernel(&scene.settings),
+    )
+    .map_err(ConvertError::Kernel)
+}
+
+/// A kernel measurement in `f64`: peak force (N), duration (s) and their log-unit standard
+/// deviations.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Measurement64 {
+    /// Peak contact force in N.
+    pub peak_force_n: f64,
+    /// Contact duration in s.
+    pub duration_s: f64,
+    /// Standard deviation of `ln F_max` (dimensionless).
+    pub sigma_ln_force: f64,
+    /// Standard deviation of `ln t_c` (dimensionless).
+    pub sigma_ln_duration: f64,
+}
+
+/// Kernel `Measurement` (f32) -> [`Measurement64`], exact.
+pub fn measurement_from_kernel(m: &Measurement) -> Measurement64 {
+    Measurement64 {
+        peak_force_n: m.peak_force_n as f64,
+        duration_s: m.duration_s as f64,
+        sigma_ln_force: m.sigma_ln_force as f64,
+        sigma_ln_duration: m.sigma_ln_duration as f64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene_file(name: &str) -> SceneFile {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join("scenes")
+            .join(name);
+        crate::scene::load(path).expect("shipped scene loads")
+    }
+
+    #[test]
+    fn paper_toml_is_the_kernel_paper_scene() {
+        let file = scene_file("paper.toml");
+        assert_eq!(file, SceneFile::paper());
+        let kernel = scene_to_kernel(&file).expect("converts");
+        assert_eq!(kernel, Scene::paper().expect("kernel preset"));
+    }
+
+    #[test]
+    fn paper_narrow_toml_is_the_kernel_narrow_scene() {
+        let file = scene_file("paper_narrow.toml");
+        assert_eq!(file, SceneFile::paper_narrow());
+        let kernel = scene_to_kernel(&file).expect("converts");
+        assert_eq!(kernel, Scene::paper_narrow().expect("kernel preset"));
+    }
+
+    #[test]
+    fn materials_round_trip_and_named_table_matches_kernel() {
+        use crate::scene::MaterialName;
+        let pairs = [
+            (MaterialName::Coal, Material::COAL),
+            (MaterialName::Sandstone, Material::SANDSTONE),
+            (MaterialName::CarbonSteel, Material::CARBON_STEEL),
+            (MaterialName::RoofSandstone, Material::ROOF_SANDSTONE),
+            (MaterialName::SandyMudstone, Material::SANDY_MUDSTONE),
+        ];
+        for (name, kernel) in pairs {
+            assert_eq!(material_to_kernel(&name.material()), kernel, "{name:?}");
+            assert_eq!(
+                material_to_kernel(&material_from_kernel(&kernel)),
+                kernel,
+                "{name:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn kernel_refusals_are_typed() {
+        let mut s = SceneFile::paper();
+        s.settings.confidence = Some(0.4);
+        assert_eq!(
+            scene_to_kernel(&s),
+            Err(ConvertError::Kernel(coalshock::Error::OutOfRange(
+                "confidence"
+            )))
+        );
+        let mut s = SceneFile::paper();
+        for i in 0..3 {
+            let mut c = s.classes[0].clone();
+            c.name = format!("extra{i}");
+            s.classes.push(c);
+        }
+        assert!(matches!(
+            scene_to_kernel(&s),
+            Err(ConvertError::TooManyClasses {
+                classes: 5,
+                capacity: 4
+            })
+        ));
+    }
+}

@@ -1,0 +1,241 @@
+//! `host-sim`: the command line of the f64 companion of the coalshock kernel.
+//!
+//! - `host-sim paper`: the paper's scene, Table 3 and Figs 2-11 (see `PAPER.md`);
+//! - `host-sim impact`: one impact, or a batch of impacts from a CSV file;
+//! - `host-sim stream`: a labelled sample stream (`.bin` + `.truth.csv`, see `FORMATS.md`).
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use host_sim::scene::{self, SceneFile};
+use host_sim::stream::{
+    FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamOptions,
+    generate_with_progress, write_stream,
+};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// Scene used when `--scene` is not given (relative to the working directory).
+const DEFAULT_SCENE: &str = "scenes/paper.toml";
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "host-sim",
+    version,
+    about = "f64 contact integrator, sensor chain and labelled streams around the coalshock kernel"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Reproduce the paper: Table 3 and the force and compression curves (CSV + SVG).
+    Paper(host_sim::paper::PaperArgs),
+    /// Simulate one impact (or a batch of impacts) and print peak force, duration, restitution.
+    Impact(host_sim::impact_cli::ImpactArgs),
+    /// Generate a labelled sample stream: OUT.bin (little-endian i16) and OUT.truth.csv.
+    Stream(StreamArgs),
+}
+
+/// How each impact's force pulse is made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum PulseModelArg {
+    /// The contact integrator with the scene's force law.
+    Integrator,
+    /// The closed-form undamped shape F_max sin^(3/2)(pi t / t_c).
+    HertzSine,
+}
+
+/// Flags of `host-sim stream`.
+#[derive(Debug, Clone, Args)]
+struct StreamArgs {
+    /// Scene file (TOML). Default: scenes/paper.toml if it exists, else the built-in paper
+    /// scene.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Number of impacts.
+    #[arg(long)]
+    n: usize,
+    /// Seed of every random draw (impacts, timing, noise, faults).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Output: writes OUT.bin and OUT.truth.csv (a trailing .bin is dropped first).
+    #[arg(long)]
+    out: PathBuf,
+    /// How each force pulse is made.
+    #[arg(long, value_enum, default_value_t = PulseModelArg::Integrator)]
+    pulse_model: PulseModelArg,
+    /// Quiet gap between pulses in ms, uniform between these two values.
+    #[arg(long, num_args = 2, value_names = ["MIN", "MAX"], default_values_t = [2.0, 10.0])]
+    gap_ms: Vec<f64>,
+    /// Share of impacts that start less than one contact time after the previous one.
+    #[arg(long, default_value_t = 0.0)]
+    pileup_share: f64,
+    /// Share of impacts scaled to 1.5 x the ADC's full scale (rejected as saturated).
+    #[arg(long, default_value_t = 0.0)]
+    saturate_share: f64,
+    /// Share of impacts that lose samples near their peak (a recorded gap).
+    #[arg(long, default_value_t = 0.0)]
+    drop_share: f64,
+    /// Share of quiet stretches between pulses with a single-sample EMI spike.
+    #[arg(long, default_value_t = 0.0)]
+    spike_share: f64,
+    /// Share of quiet stretches with a stuck run (the value held for 100 samples).
+    #[arg(long, default_value_t = 0.0)]
+    stuck_share: f64,
+    /// Share of quiet stretches that lose samples (a recorded gap).
+    #[arg(long, default_value_t = 0.0)]
+    drop_quiet_share: f64,
+    /// Samples lost per drop.
+    #[arg(long, default_value_t = 8)]
+    drop_samples: u32,
+    /// DC drift in counts per s added to the scene's.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    drift: f64,
+    /// End the stream right after the peak of the last impact.
+    #[arg(long)]
+    end_mid_pulse: bool,
+}
+
+impl StreamArgs {
+    fn options(&self) -> StreamOptions {
+        let ms = |i: usize| self.gap_ms.get(i).copied().unwrap_or(f64::NAN) * 1e-3;
+        StreamOptions {
+            gap_s: [ms(0), ms(1)],
+            pileup_share: self.pileup_share,
+            pulse_model: match self.pulse_model {
+                PulseModelArg::Integrator => PulseModel::Integrator,
+                PulseModelArg::HertzSine => PulseModel::HertzSine,
+            },
+            faults: FaultOptions {
+                saturate_share: self.saturate_share,
+                drop_share: self.drop_share,
+                spike_share: self.spike_share,
+                stuck_share: self.stuck_share,
+                drop_quiet_share: self.drop_quiet_share,
+                drop_samples: self.drop_samples,
+                drift_counts_per_s: self.drift,
+                end_mid_pulse: self.end_mid_pulse,
+                ..FaultOptions::default()
+            },
+            ..StreamOptions::default()
+        }
+    }
+}
+
+/// The scene of `--scene`, else [`DEFAULT_SCENE`] if it exists, else the built-in paper scene.
+fn resolve_scene(path: Option<&Path>) -> Result<(SceneFile, String)> {
+    match path {
+        Some(p) => Ok((scene::load(p)?, p.display().to_string())),
+        None if Path::new(DEFAULT_SCENE).is_file() => {
+            Ok((scene::load(DEFAULT_SCENE)?, DEFAULT_SCENE.to_string()))
+        }
+        None => Ok((SceneFile::paper(), "built-in paper scene".to_string())),
+    }
+}
+
+fn run_stream(args: &StreamArgs) -> Result<()> {
+    let (scene, from) = resolve_scene(args.scene.as_deref())?;
+    let options = args.options();
+    let bar = ProgressBar::new(args.n as u64);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} impacts ({eta})")
+                .context("progress bar template")?
+                .progress_chars("=> "),
+        );
+        bar.set_message("simulating");
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let stream = generate_with_progress(&scene, args.n, args.seed, &options, &mut |done| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    let stream = stream.with_context(|| format!("generating a stream of {from}"))?;
+    let (bin, csv) = write_stream(&stream, &args.out)?;
+    print_summary(&stream, &from, args.seed, &bin, &csv);
+    Ok(())
+}
+
+fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) {
+    let count = |f: ImpactFault| s.truth.iter().filter(|t| t.fault == f).count();
+    let events = |k: FaultKind| s.events.iter().filter(|e| e.kind == k).count();
+    println!(
+        "{} impacts of {scene} (seed {seed}) in {} samples at {} Hz ({:.3} s)",
+        s.truth.len(),
+        s.timeline_samples,
+        s.sample_rate_hz,
+        s.timeline_samples as f64 / s.sample_rate_hz
+    );
+    for (i, name) in s.class_names.iter().enumerate() {
+        let n = s.truth.iter().filter(|t| t.class == i).count();
+        println!("  {name}: {n}");
+    }
+    println!(
+        "faults: {} pile-up impacts, {} saturated, {} gaps in pulses, {} truncated, {} gaps \
+         ({} samples lost), {} spikes, {} stuck runs",
+        count(ImpactFault::PileUp),
+        count(ImpactFault::Saturated),
+        count(ImpactFault::Gap),
+        count(ImpactFault::Truncated),
+        s.gaps.len(),
+        s.gaps.iter().map(|g| g.lost as u64).sum::<u64>(),
+        events(FaultKind::Spike),
+        events(FaultKind::Stuck)
+    );
+    println!("wrote {} and {}", bin.display(), csv.display());
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match &cli.command {
+        Command::Paper(args) => host_sim::paper::run(args),
+        Command::Impact(args) => host_sim::impact_cli::run(args),
+        Command::Stream(args) => run_stream(args),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn cli_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn stream_flags_map_onto_the_options() {
+        let cli = Cli::try_parse_from([
+            "host-sim",
+            "stream",
+            "--n",
+            "5",
+            "--out",
+            "x",
+            "--gap-ms",
+            "1",
+            "3",
+            "--spike-share",
+            "0.5",
+            "--drift",
+            "-20",
+        ])
+        .expect("parses");
+        let Command::Stream(args) = cli.command else {
+            panic!("not the stream command");
+        };
+        let o = args.options();
+        assert_eq!(o.gap_s, [0.001, 0.003]);
+        assert_eq!(o.faults.spike_share, 0.5);
+        assert_eq!(o.faults.drift_counts_per_s, -20.0);
+        assert_eq!(o.pulse_model, PulseModel::Integrator);
+        o.validate().expect("valid");
+    }
+}

@@ -1,0 +1,1004 @@
+//! The TOML scene format of host-sim (`f64`, SI units): the plate, the particle classes with
+//! their priors, the contact force law the simulation integrates, the sensor chain that turns
+//! contact force into ADC counts, and optional overrides of the kernel's settings.
+//!
+//! ```toml
+//! name = "paper"
+//! plate = "carbon_steel"              # a name, or { density_kg_m3 = .., modulus_pa = .., poisson = .. }
+//!
+//! [[classes]]
+//! name = "coal"                       # at most 16 bytes (the kernel's NAME_LEN)
+//! material = "coal"
+//! radius_m = [0.015, 0.04]            # log-uniform prior on [min, max]
+//! speed_m_s = [1.0, 5.0]              # uniform prior; or drop_height_m = [h0, h1] (uniform height)
+//! prior = 1.0                         # relative share of impacts (default 1)
+//!
+//! [contact]
+//! law = "hertz"                       # or hunt_crossley / lankarani_nikravesh / flores /
+//!                                     # gonthier / tsuji { restitution }, adams { c_max_n_s_m, d_m },
+//!                                     # adams_restitution { restitution, d_m }
+//!
+//! [sensor]
+//! sample_rate_hz = 100000.0
+//! effective_mass_kg = 50.0
+//! counts_per_m_s2 = 30.0
+//! noise_rms_counts = 4.0
+//! adc_bits = 16
+//! # dc_offset_counts = 0.0, dc_drift_counts_per_s = 0.0, oversample = 32
+//! # accelerometer = { frequency_hz = 40000.0, damping_ratio = 0.05 }
+//! # [[sensor.beam_modes]]  frequency_hz = 180.0, damping_ratio = 0.02, gain = 0.1
+//!
+//! [settings]                          # optional, any subset of the kernel's Settings
+//! confidence = 0.9
+//! ```
+//!
+//! [`load`] reads, parses and checks a file; every error names the file, and the field or the
+//! line and column that is wrong. [`SceneFile::paper`] and [`SceneFile::paper_narrow`] are the
+//! built-in scenes, equal to `scenes/paper.toml` and `scenes/paper_narrow.toml` and, once
+//! converted ([`crate::convert`]), to the kernel's `Scene::paper()` and `Scene::paper_narrow()`.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::de::{self, MapAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use crate::hertz64::Material64;
+use crate::laws::LawSpec;
+
+/// Longest class name in bytes (the kernel's `coalshock::scene::NAME_LEN`).
+pub const MAX_CLASS_NAME_BYTES: usize = coalshock::scene::NAME_LEN;
+
+/// Most classes a scene file may hold (the kernel's `coalshock::scene::MAX_CLASSES`).
+pub const MAX_CLASSES: usize = coalshock::scene::MAX_CLASSES;
+
+/// Widest ADC in bits: samples are stored as `i16` (see `FORMATS.md`).
+pub const MAX_ADC_BITS: u8 = 16;
+
+/// Narrowest ADC in bits.
+pub const MIN_ADC_BITS: u8 = 2;
+
+/// Largest accepted oversampling factor of the sensor's fine time grid.
+pub const MAX_OVERSAMPLE: u32 = 1024;
+
+/// Default oversampling factor of the sensor's fine time grid (fine step `1 / (32 f_s)`).
+pub const DEFAULT_OVERSAMPLE: u32 = 32;
+
+/// What is wrong with a scene file.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read scene file {}: {error}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        error: std::io::Error,
+    },
+    /// The file is not valid TOML or does not have the scene's shape (the message carries the
+    /// line, column and key).
+    #[error("scene file {}: {message}", path.display())]
+    Parse {
+        /// The file (`<string>` when parsed from a string).
+        path: PathBuf,
+        /// The parser's message.
+        message: String,
+    },
+    /// A value is out of its range.
+    #[error("scene{}: {field} {problem}", path.as_ref().map(|p| format!(" file {}", p.display())).unwrap_or_default())]
+    Invalid {
+        /// The file, if the scene came from one.
+        path: Option<PathBuf>,
+        /// Where in the scene, e.g. `classes[1].radius_m`.
+        field: String,
+        /// What is wrong, e.g. `must be finite and > 0 (got -1)`.
+        problem: String,
+    },
+}
+
+impl SceneError {
+    fn invalid(field: impl Into<String>, problem: impl Into<String>) -> Self {
+        SceneError::Invalid {
+            path: None,
+            field: field.into(),
+            problem: problem.into(),
+        }
+    }
+
+    fn in_file(self, file: &Path) -> Self {
+        match self {
+            SceneError::Invalid {
+                path: None,
+                field,
+                problem,
+            } => SceneError::Invalid {
+                path: Some(file.to_path_buf()),
+                field,
+                problem,
+            },
+            other => other,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Materials
+// ---------------------------------------------------------------------------------------------
+
+/// The materials a scene can name (physics notes, section 4; the paper's Tables 1-2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MaterialName {
+    /// Coal (paper): 1380 kg/m^3, 5.3 GPa, nu 0.32.
+    Coal,
+    /// Sandstone gangue (paper): 2487 kg/m^3, 13.5 GPa, nu 0.123.
+    Sandstone,
+    /// Carbon-steel plate (paper): 7850 kg/m^3, 206 GPa, nu 0.28.
+    CarbonSteel,
+    /// Roof sandstone (literature): 2525 kg/m^3, 35 GPa, nu 0.25.
+    RoofSandstone,
+    /// Sandy mudstone (literature): 2500 kg/m^3, 5.4 GPa, nu 0.15.
+    SandyMudstone,
+}
+
+impl MaterialName {
+    /// Every named material, in the order of [`MaterialName::name`].
+    pub const ALL: [MaterialName; 5] = [
+        MaterialName::Coal,
+        MaterialName::Sandstone,
+        MaterialName::CarbonSteel,
+        MaterialName::RoofSandstone,
+        MaterialName::SandyMudstone,
+    ];
+
+    /// The name used in scene files (`snake_case`).
+    pub fn name(self) -> &'static str {
+        match self {
+            MaterialName::Coal => "coal",
+            MaterialName::Sandstone => "sandstone",
+            MaterialName::CarbonSteel => "carbon_steel",
+            MaterialName::RoofSandstone => "roof_sandstone",
+            MaterialName::SandyMudstone => "sandy_mudstone",
+        }
+    }
+
+    /// The material by its scene-file name (exact, lower case), or `None`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// Density (kg/m^3), Young's modulus (Pa) and Poisson's ratio of the material.
+    pub fn material(self) -> Material64 {
+        let m = |density_kg_m3, modulus_pa, poisson| Material64 {
+            density_kg_m3,
+            modulus_pa,
+            poisson,
+        };
+        match self {
+            MaterialName::Coal => Material64::COAL,
+            MaterialName::Sandstone => Material64::SANDSTONE,
+            MaterialName::CarbonSteel => Material64::CARBON_STEEL,
+            MaterialName::RoofSandstone => m(2525.0, 35.0e9, 0.25),
+            MaterialName::SandyMudstone => m(2500.0, 5.4e9, 0.15),
+        }
+    }
+}
+
+/// A material in a scene file: a name from [`MaterialName`] (`"coal"`) or explicit properties
+/// (`{ density_kg_m3 = 1380.0, modulus_pa = 5.3e9, poisson = 0.32 }`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MaterialSpec {
+    /// A material from the built-in table.
+    Named(MaterialName),
+    /// Explicit density (kg/m^3), modulus (Pa) and Poisson's ratio.
+    Custom(Material64),
+}
+
+impl MaterialSpec {
+    /// The material's properties (SI units).
+    pub fn material(&self) -> Material64 {
+        match *self {
+            MaterialSpec::Named(n) => n.material(),
+            MaterialSpec::Custom(m) => m,
+        }
+    }
+
+    /// Checks density and modulus finite and `> 0`, `0 <= nu < 0.5` (the kernel's range).
+    fn validate(&self, field: &str) -> Result<(), SceneError> {
+        let m = self.material();
+        positive(&format!("{field}.density_kg_m3"), m.density_kg_m3)?;
+        positive(&format!("{field}.modulus_pa"), m.modulus_pa)?;
+        if !(m.poisson.is_finite() && (0.0..0.5).contains(&m.poisson)) {
+            return Err(SceneError::invalid(
+                format!("{field}.poisson"),
+                format!("must be in [0, 0.5) (got {})", m.poisson),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The explicit form of a material in a file.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CustomMaterial {
+    density_kg_m3: f64,
+    modulus_pa: f64,
+    poisson: f64,
+}
+
+impl Serialize for MaterialSpec {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match *self {
+            MaterialSpec::Named(n) => s.serialize_str(n.name()),
+            MaterialSpec::Custom(m) => CustomMaterial {
+                density_kg_m3: m.density_kg_m3,
+                modulus_pa: m.modulus_pa,
+                poisson: m.poisson,
+            }
+            .serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for MaterialSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = MaterialSpec;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(
+                    "a material name (coal, sandstone, carbon_steel, roof_sandstone, \
+                     sandy_mudstone) or a table { density_kg_m3, modulus_pa, poisson }",
+                )
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<MaterialSpec, E> {
+                MaterialName::from_name(v)
+                    .map(MaterialSpec::Named)
+                    .ok_or_else(|| {
+                        let known: Vec<&str> = MaterialName::ALL.iter().map(|m| m.name()).collect();
+                        E::custom(format!(
+                            "unknown material {v:?}; known: {}, or give {{ density_kg_m3, \
+                         modulus_pa, poisson }}",
+                            known.join(", ")
+                        ))
+                    })
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<MaterialSpec, A::Error> {
+                let c = CustomMaterial::deserialize(de::value::MapAccessDeserializer::new(map))?;
+                Ok(MaterialSpec::Custom(Material64 {
+                    density_kg_m3: c.density_kg_m3,
+                    modulus_pa: c.modulus_pa,
+                    poisson: c.poisson,
+                }))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ranges and classes
+// ---------------------------------------------------------------------------------------------
+
+/// A closed interval `[min, max]`, written `[min, max]` in a file; unit given by the field name.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(from = "[f64; 2]", into = "[f64; 2]")]
+pub struct Range64 {
+    /// Lower end.
+    pub min: f64,
+    /// Upper end.
+    pub max: f64,
+}
+
+impl Range64 {
+    /// `[min, max]` (checked by the scene's validation).
+    pub const fn new(min: f64, max: f64) -> Self {
+        Self { min, max }
+    }
+
+    fn validate(&self, field: &str) -> Result<(), SceneError> {
+        positive(&format!("{field}[0]"), self.min)?;
+        positive(&format!("{field}[1]"), self.max)?;
+        if self.min >= self.max {
+            return Err(SceneError::invalid(
+                field,
+                format!("must have min < max (got [{}, {}])", self.min, self.max),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl From<[f64; 2]> for Range64 {
+    fn from(v: [f64; 2]) -> Self {
+        Self::new(v[0], v[1])
+    }
+}
+
+impl From<Range64> for [f64; 2] {
+    fn from(r: Range64) -> Self {
+        [r.min, r.max]
+    }
+}
+
+/// How the impact speed of a class is given, and so its prior.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SpeedSpec {
+    /// Impact speed `u` in m/s, uniform on the range (file key `speed_m_s`).
+    Uniform(Range64),
+    /// Drop height `h` in m, uniform on the range; `u = sqrt(2 g h)`, `g = 9.80665 m/s^2`
+    /// (file key `drop_height_m`).
+    DropHeight(Range64),
+}
+
+/// One particle class of a scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ClassRaw", into = "ClassRaw")]
+pub struct ClassSpec {
+    /// Name shown in reports, at most [`MAX_CLASS_NAME_BYTES`] bytes.
+    pub name: String,
+    /// The particle's material.
+    pub material: MaterialSpec,
+    /// Sphere radius `R` in m, log-uniform on the range.
+    pub radius_m: Range64,
+    /// Impact speed prior.
+    pub speed: SpeedSpec,
+    /// Prior weight (relative share of impacts), finite and `> 0`; 1 when not given.
+    pub prior: f64,
+}
+
+/// A class as written in a file: exactly one of `speed_m_s` and `drop_height_m`.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ClassRaw {
+    name: String,
+    material: MaterialSpec,
+    radius_m: Range64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    speed_m_s: Option<Range64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    drop_height_m: Option<Range64>,
+    #[serde(default = "one")]
+    prior: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl TryFrom<ClassRaw> for ClassSpec {
+    type Error = String;
+    fn try_from(r: ClassRaw) -> Result<Self, String> {
+        let speed = match (r.speed_m_s, r.drop_height_m) {
+            (Some(s), None) => SpeedSpec::Uniform(s),
+            (None, Some(h)) => SpeedSpec::DropHeight(h),
+            (Some(_), Some(_)) => {
+                return Err(format!(
+                    "class {:?}: give either speed_m_s or drop_height_m, not both",
+                    r.name
+                ));
+            }
+            (None, None) => {
+                return Err(format!(
+                    "class {:?}: missing speed_m_s = [min, max] (m/s) or drop_height_m = \
+                     [min, max] (m)",
+                    r.name
+                ));
+            }
+        };
+        Ok(ClassSpec {
+            name: r.name,
+            material: r.material,
+            radius_m: r.radius_m,
+            speed,
+            prior: r.prior,
+        })
+    }
+}
+
+impl From<ClassSpec> for ClassRaw {
+    fn from(c: ClassSpec) -> Self {
+        let (speed_m_s, drop_height_m) = match c.speed {
+            SpeedSpec::Uniform(s) => (Some(s), None),
+            SpeedSpec::DropHeight(h) => (None, Some(h)),
+        };
+        ClassRaw {
+            name: c.name,
+            material: c.material,
+            radius_m: c.radius_m,
+            speed_m_s,
+            drop_height_m,
+            prior: c.prior,
+        }
+    }
+}
+
+impl ClassSpec {
+    /// A class with prior weight 1 and a uniform speed prior.
+    pub fn new(name: &str, material: MaterialSpec, radius_m: Range64, speed_m_s: Range64) -> Self {
+        Self {
+            name: name.to_string(),
+            material,
+            radius_m,
+            speed: SpeedSpec::Uniform(speed_m_s),
+            prior: 1.0,
+        }
+    }
+
+    /// The speed range in m/s: the given one, or `sqrt(2 g h)` at both ends of the drop
+    /// height range (`g = 9.80665 m/s^2`).
+    pub fn speed_range_m_s(&self) -> Range64 {
+        match self.speed {
+            SpeedSpec::Uniform(s) => s,
+            SpeedSpec::DropHeight(h) => Range64::new(drop_speed_m_s(h.min), drop_speed_m_s(h.max)),
+        }
+    }
+
+    fn validate(&self, field: &str) -> Result<(), SceneError> {
+        if self.name.is_empty() || self.name.len() > MAX_CLASS_NAME_BYTES {
+            return Err(SceneError::invalid(
+                format!("{field}.name"),
+                format!(
+                    "must be 1 to {MAX_CLASS_NAME_BYTES} bytes long (got {:?}, {} bytes)",
+                    self.name,
+                    self.name.len()
+                ),
+            ));
+        }
+        self.material.validate(&format!("{field}.material"))?;
+        self.radius_m.validate(&format!("{field}.radius_m"))?;
+        match self.speed {
+            SpeedSpec::Uniform(s) => s.validate(&format!("{field}.speed_m_s"))?,
+            SpeedSpec::DropHeight(h) => h.validate(&format!("{field}.drop_height_m"))?,
+        }
+        positive(&format!("{field}.prior"), self.prior)
+    }
+}
+
+/// Free-fall speed `u = sqrt(2 g h)` in m/s after a drop of `height_m` (m),
+/// `g = 9.80665 m/s^2`.
+pub fn drop_speed_m_s(height_m: f64) -> f64 {
+    (2.0 * crate::hertz64::STANDARD_GRAVITY_M_S2 * height_m).sqrt()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Contact law
+// ---------------------------------------------------------------------------------------------
+
+/// The contact force law the simulation integrates (`[contact]`, tag `law`), mapped onto the
+/// integrator's [`LawSpec`] by [`ContactLaw::law_spec`]. The stiffness is always the Hertz
+/// `k = 4/3 E* sqrt(R)` with exponent 1.5 of the impact being simulated; the contact is
+/// gravity-free (as the kernel's envelopes are).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ContactLaw {
+    /// Undamped Hertz `F = k delta^(3/2)` (restitution 1); the kernel's model.
+    #[default]
+    Hertz,
+    /// Hunt-Crossley `F = k delta^1.5 (1 + chi delta_dot / u)`, `chi = 3 (1 - e) / 2`.
+    HuntCrossley {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// Lankarani-Nikravesh, `chi = 3 (1 - e^2) / 4`.
+    LankaraniNikravesh {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// Flores et al., `chi = 8 (1 - e) / (5 e)`.
+    Flores {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// Gonthier et al., `chi = (1 - e^2) / e`.
+    Gonthier {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// DEM (Tsuji / Hertz-Mindlin) damping with `beta(e)`.
+    Tsuji {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// MSC Adams IMPACT `F = max(0, k delta^1.5 + STEP(delta, 0, 0, d, c_max) delta_dot)`.
+    Adams {
+        /// Full damping `c_max` in N s/m (`>= 0`).
+        c_max_n_s_m: f64,
+        /// Penetration `d` in m over which the damping ramps up (`> 0`; Adams: about 1e-5).
+        d_m: f64,
+    },
+    /// Adams IMPACT with `c_max` solved per impact so that it rebounds with `restitution`
+    /// (one root search per impact: slow).
+    AdamsRestitution {
+        /// Target coefficient of restitution in (0, 1).
+        restitution: f64,
+        /// Penetration `d` in m (`> 0`).
+        d_m: f64,
+    },
+}
+
+impl ContactLaw {
+    /// The integrator's law specification.
+    pub fn law_spec(&self) -> LawSpec {
+        match *self {
+            ContactLaw::Hertz => LawSpec::Hertz,
+            ContactLaw::HuntCrossley { restitution } => LawSpec::HuntCrossley { restitution },
+            ContactLaw::LankaraniNikravesh { restitution } => {
+                LawSpec::LankaraniNikravesh { restitution }
+            }
+            ContactLaw::Flores { restitution } => LawSpec::Flores { restitution },
+            ContactLaw::Gonthier { restitution } => LawSpec::Gonthier { restitution },
+            ContactLaw::Tsuji { restitution } => LawSpec::Tsuji { restitution },
+            ContactLaw::Adams { c_max_n_s_m, d_m } => LawSpec::Adams { c_max_n_s_m, d_m },
+            ContactLaw::AdamsRestitution { restitution, d_m } => {
+                LawSpec::AdamsRestitution { restitution, d_m }
+            }
+        }
+    }
+
+    fn validate(&self) -> Result<(), SceneError> {
+        let e_in = |e: f64, hi_open: bool| {
+            let ok = e.is_finite() && e > 0.0 && if hi_open { e < 1.0 } else { e <= 1.0 };
+            if ok {
+                Ok(())
+            } else {
+                Err(SceneError::invalid(
+                    "contact.restitution",
+                    format!(
+                        "must be in (0, 1{} (got {e})",
+                        if hi_open { ")" } else { "]" }
+                    ),
+                ))
+            }
+        };
+        match *self {
+            ContactLaw::Hertz => Ok(()),
+            ContactLaw::HuntCrossley { restitution }
+            | ContactLaw::LankaraniNikravesh { restitution }
+            | ContactLaw::Flores { restitution }
+            | ContactLaw::Gonthier { restitution }
+            | ContactLaw::Tsuji { restitution } => e_in(restitution, false),
+            ContactLaw::Adams { c_max_n_s_m, d_m } => {
+                if !(c_max_n_s_m.is_finite() && c_max_n_s_m >= 0.0) {
+                    return Err(SceneError::invalid(
+                        "contact.c_max_n_s_m",
+                        format!("must be finite and >= 0 (got {c_max_n_s_m})"),
+                    ));
+                }
+                positive("contact.d_m", d_m)
+            }
+            ContactLaw::AdamsRestitution { restitution, d_m } => {
+                e_in(restitution, true)?;
+                positive("contact.d_m", d_m)
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sensor chain
+// ---------------------------------------------------------------------------------------------
+
+/// The accelerometer's own resonance: a second-order low-pass
+/// `H(s) = w^2 / (s^2 + 2 zeta w s + w^2)`, `w = 2 pi f_n`, unit gain at DC, `|H| = 1/(2 zeta)`
+/// at `f_n`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Resonance {
+    /// Natural frequency `f_n` in Hz.
+    pub frequency_hz: f64,
+    /// Damping ratio `zeta` (dimensionless, `> 0`).
+    pub damping_ratio: f64,
+}
+
+/// One beam mode: a base-excited mass-spring-damper riding on the rigid beam. With `a` the
+/// rigid acceleration `F / M`, its coordinate obeys `q'' + 2 zeta w q' + w^2 q = a`
+/// (`w = 2 pi f_n`) and it adds `gain q''` to the beam's acceleration: the modal term
+/// `gain s^2 / (s^2 + 2 zeta w s + w^2)` of a free-free structure's accelerance
+/// (`gain = M phi^2 / m_mode`). It carries no net impulse (zero at DC) and, for a pulse much
+/// shorter than its period, adds `gain F / M` to the peak.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeamMode {
+    /// Natural frequency `f_n` in Hz.
+    pub frequency_hz: f64,
+    /// Damping ratio `zeta` (dimensionless, `> 0`).
+    pub damping_ratio: f64,
+    /// Dimensionless weight of the mode's acceleration in the sensor's signal.
+    pub gain: f64,
+}
+
+/// The sensor chain (`[sensor]`): contact force -> beam -> accelerometer -> sampling -> noise
+/// -> offset and drift -> ADC (see [`crate::sensor`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSpec {
+    /// Sample rate `f_s` in Hz.
+    pub sample_rate_hz: f64,
+    /// Effective (rigid) mass `M` of the tail beam in kg: `a = F / M`.
+    pub effective_mass_kg: f64,
+    /// Accelerometer and ADC sensitivity `S` in counts per m/s^2.
+    pub counts_per_m_s2: f64,
+    /// RMS of the additive white Gaussian noise in counts (`>= 0`).
+    pub noise_rms_counts: f64,
+    /// ADC resolution in bits, 2 to 16: codes `-2^(b-1) ..= 2^(b-1) - 1`.
+    pub adc_bits: u8,
+    /// Constant offset added before quantisation, in counts.
+    #[serde(default)]
+    pub dc_offset_counts: f64,
+    /// Linear drift added before quantisation, in counts per s (of stream time).
+    #[serde(default)]
+    pub dc_drift_counts_per_s: f64,
+    /// Oversampling factor of the fine time grid the linear stages run on (1 to 1024).
+    #[serde(default = "default_oversample")]
+    pub oversample: u32,
+    /// The accelerometer's resonance, if modelled.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accelerometer: Option<Resonance>,
+    /// Beam modes, if modelled.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub beam_modes: Vec<BeamMode>,
+}
+
+fn default_oversample() -> u32 {
+    DEFAULT_OVERSAMPLE
+}
+
+impl SensorSpec {
+    /// A rigid chain (no accelerometer resonance, no modes, no offset or drift).
+    pub fn rigid(
+        sample_rate_hz: f64,
+        effective_mass_kg: f64,
+        counts_per_m_s2: f64,
+        noise_rms_counts: f64,
+        adc_bits: u8,
+    ) -> Self {
+        Self {
+            sample_rate_hz,
+            effective_mass_kg,
+            counts_per_m_s2,
+            noise_rms_counts,
+            adc_bits,
+            dc_offset_counts: 0.0,
+            dc_drift_counts_per_s: 0.0,
+            oversample: DEFAULT_OVERSAMPLE,
+            accelerometer: None,
+            beam_modes: Vec::new(),
+        }
+    }
+
+    /// Lowest and highest ADC code, `(-2^(b-1), 2^(b-1) - 1)`.
+    pub fn adc_range(&self) -> (i32, i32) {
+        let bits = self.adc_bits.clamp(MIN_ADC_BITS, MAX_ADC_BITS);
+        let half = 1i32 << (bits - 1);
+        (-half, half - 1)
+    }
+
+    /// Checks every field (see the field docs for the ranges).
+    pub fn validate(&self) -> Result<(), SceneError> {
+        positive("sensor.sample_rate_hz", self.sample_rate_hz)?;
+        positive("sensor.effective_mass_kg", self.effective_mass_kg)?;
+        positive("sensor.counts_per_m_s2", self.counts_per_m_s2)?;
+        if !(self.noise_rms_counts.is_finite() && self.noise_rms_counts >= 0.0) {
+            return Err(SceneError::invalid(
+                "sensor.noise_rms_counts",
+                format!("must be finite and >= 0 (got {})", self.noise_rms_counts),
+            ));
+        }
+        if !(MIN_ADC_BITS..=MAX_ADC_BITS).contains(&self.adc_bits) {
+            return Err(SceneError::invalid(
+                "sensor.adc_bits",
+                format!(
+                    "must be {MIN_ADC_BITS} to {MAX_ADC_BITS} (got {})",
+                    self.adc_bits
+                ),
+            ));
+        }
+        finite("sensor.dc_offset_counts", self.dc_offset_counts)?;
+        finite("sensor.dc_drift_counts_per_s", self.dc_drift_counts_per_s)?;
+        if !(1..=MAX_OVERSAMPLE).contains(&self.oversample) {
+            return Err(SceneError::invalid(
+                "sensor.oversample",
+                format!("must be 1 to {MAX_OVERSAMPLE} (got {})", self.oversample),
+            ));
+        }
+        if let Some(r) = &self.accelerometer {
+            positive("sensor.accelerometer.frequency_hz", r.frequency_hz)?;
+            positive("sensor.accelerometer.damping_ratio", r.damping_ratio)?;
+        }
+        for (i, m) in self.beam_modes.iter().enumerate() {
+            positive(
+                &format!("sensor.beam_modes[{i}].frequency_hz"),
+                m.frequency_hz,
+            )?;
+            positive(
+                &format!("sensor.beam_modes[{i}].damping_ratio"),
+                m.damping_ratio,
+            )?;
+            finite(&format!("sensor.beam_modes[{i}].gain"), m.gain)?;
+        }
+        Ok(())
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Kernel settings overrides
+// ---------------------------------------------------------------------------------------------
+
+/// Optional overrides of the kernel's `coalshock::Settings` (`[settings]`); a missing field
+/// keeps the kernel default. The kernel checks the result when the scene is built.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingsOverrides {
+    /// Trigger level in noise RMS.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trigger_sigmas: Option<f64>,
+    /// Release level in noise RMS.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub release_sigmas: Option<f64>,
+    /// Samples below the release level that end a pulse.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_samples: Option<u16>,
+    /// Baseline tracking time constant in s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub baseline_tau_s: Option<f64>,
+    /// Identical consecutive samples that flag a stuck sensor (0: off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stuck_samples: Option<u16>,
+    /// Model tolerance in log units.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_sigma: Option<f64>,
+    /// Posterior needed for a class verdict, in (0.5, 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub confidence: Option<f64>,
+    /// Standardised distance beyond which a pulse is out of every envelope.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub out_sigmas: Option<f64>,
+    /// Cells per side of the separability grid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub separability_grid: Option<u16>,
+}
+
+impl SettingsOverrides {
+    /// `true` when nothing is overridden.
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The scene file
+// ---------------------------------------------------------------------------------------------
+
+/// A whole scene file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Name of the scene (free text).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub name: String,
+    /// The plate (tail beam) material.
+    pub plate: MaterialSpec,
+    /// The particle classes, in the order verdicts index them (2 to [`MAX_CLASSES`]).
+    pub classes: Vec<ClassSpec>,
+    /// The contact law of the simulation (default undamped Hertz).
+    #[serde(default)]
+    pub contact: ContactLaw,
+    /// The sensor chain.
+    pub sensor: SensorSpec,
+    /// Overrides of the kernel's settings.
+    #[serde(default, skip_serializing_if = "SettingsOverrides::is_empty")]
+    pub settings: SettingsOverrides,
+}
+
+impl SceneFile {
+    /// The paper's scene, as the kernel's `Scene::paper()`: coal (1380 kg/m^3, 5.3 GPa, 0.32)
+    /// and sandstone gangue (2487 kg/m^3, 13.5 GPa, 0.123) on carbon steel, `R` in
+    /// `[0.015, 0.04]` m (log-uniform), `u` in `[1, 5]` m/s (uniform), equal priors,
+    /// undamped Hertz contact; sensor 100 kS/s, 50 kg, 30 counts per m/s^2, 4 counts RMS
+    /// noise, 16-bit ADC, no resonance, modes, offset or drift.
+    pub fn paper() -> Self {
+        Self::paper_with_speed("paper", Range64::new(1.0, 5.0))
+    }
+
+    /// [`SceneFile::paper`] with `u` in `[2.5, 3.5]` m/s, as `Scene::paper_narrow()`.
+    pub fn paper_narrow() -> Self {
+        Self::paper_with_speed("paper_narrow", Range64::new(2.5, 3.5))
+    }
+
+    fn paper_with_speed(name: &str, speed: Range64) -> Self {
+        let radius = Range64::new(0.015, 0.04);
+        Self {
+            name: name.to_string(),
+            plate: MaterialSpec::Named(MaterialName::CarbonSteel),
+            classes: vec![
+                ClassSpec::new(
+                    "coal",
+                    MaterialSpec::Named(MaterialName::Coal),
+                    radius,
+                    speed,
+                ),
+                ClassSpec::new(
+                    "gangue",
+                    MaterialSpec::Named(MaterialName::Sandstone),
+                    radius,
+                    speed,
+                ),
+            ],
+            contact: ContactLaw::Hertz,
+            sensor: SensorSpec::rigid(100_000.0, 50.0, 30.0, 4.0, 16),
+            settings: SettingsOverrides::default(),
+        }
+    }
+
+    /// Parses and checks a scene from TOML text.
+    pub fn from_toml_str(text: &str) -> Result<Self, SceneError> {
+        let scene: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: PathBuf::from("<string>"),
+            message: e.to_string(),
+        })?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// The scene as TOML text (what [`load`] reads back to an equal scene).
+    pub fn to_toml_string(&self) -> Result<String, SceneError> {
+        toml::to_string(self).map_err(|e| SceneError::Parse {
+            path: PathBuf::from("<string>"),
+            message: e.to_string(),
+        })
+    }
+
+    /// Checks every value: materials, ranges, priors, class names (unique, at most
+    /// [`MAX_CLASS_NAME_BYTES`] bytes), 2 to [`MAX_CLASSES`] classes, the contact law's
+    /// parameters and the sensor chain.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        self.plate.validate("plate")?;
+        if self.classes.len() < 2 || self.classes.len() > MAX_CLASSES {
+            return Err(SceneError::invalid(
+                "classes",
+                format!(
+                    "must hold 2 to {MAX_CLASSES} classes (got {})",
+                    self.classes.len()
+                ),
+            ));
+        }
+        for (i, c) in self.classes.iter().enumerate() {
+            c.validate(&format!("classes[{i}]"))?;
+            if self.classes[..i].iter().any(|o| o.name == c.name) {
+                return Err(SceneError::invalid(
+                    format!("classes[{i}].name"),
+                    format!("{:?} is used by an earlier class", c.name),
+                ));
+            }
+        }
+        self.contact.validate()?;
+        self.sensor.validate()?;
+        for (name, v) in [
+            ("settings.trigger_sigmas", self.settings.trigger_sigmas),
+            ("settings.release_sigmas", self.settings.release_sigmas),
+            ("settings.baseline_tau_s", self.settings.baseline_tau_s),
+            ("settings.model_sigma", self.settings.model_sigma),
+            ("settings.confidence", self.settings.confidence),
+            ("settings.out_sigmas", self.settings.out_sigmas),
+        ] {
+            if let Some(v) = v {
+                finite(name, v)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Prior weights normalised to sum 1, in class order.
+    pub fn class_probabilities(&self) -> Vec<f64> {
+        let total: f64 = self.classes.iter().map(|c| c.prior).sum();
+        self.classes.iter().map(|c| c.prior / total).collect()
+    }
+}
+
+/// Reads, parses and checks a scene file. Errors name the file and the line and column (parse
+/// errors) or the field (range errors) that is wrong.
+pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|error| SceneError::Read {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    let scene: SceneFile = toml::from_str(&text).map_err(|e| SceneError::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    scene.validate().map_err(|e| e.in_file(path))?;
+    Ok(scene)
+}
+
+fn positive(field: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            field,
+            format!("must be finite and > 0 (got {v})"),
+        ))
+    }
+}
+
+fn finite(field: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            field,
+            format!("must be finite (got {v})"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_round_trips_through_toml() {
+        let p = SceneFile::paper();
+        let text = p.to_toml_string().expect("serialize");
+        assert_eq!(SceneFile::from_toml_str(&text).expect("parse"), p);
+    }
+
+    #[test]
+    fn errors_name_the_field() {
+        let mut s = SceneFile::paper();
+        s.classes[1].radius_m = Range64::new(0.04, 0.015);
+        let e = s.validate().expect_err("inverted").to_string();
+        assert!(e.contains("classes[1].radius_m"), "{e}");
+        let text = SceneFile::paper()
+            .to_toml_string()
+            .expect("serialize")
+            .replace("\"sandstone\"", "\"sandston\"");
+        let e = SceneFile::from_toml_str(&text)
+            .expect_err("unknown")
+            .to_string();
+        assert!(e.contains("unknown material") && e.contains("line"), "{e}");
+    }
+
+    #[test]
+    fn custom_material_and_drop_height_parse() {
+        let text = r#"
+plate = { density_kg_m3 = 7850.0, modulus_pa = 2.06e11, poisson = 0.28 }
+[[classes]]
+name = "coal"
+material = "coal"
+radius_m = [0.01, 0.02]
+drop_height_m = [0.5, 1.0]
+[[classes]]
+name = "rock"
+material = { density_kg_m3 = 2525.0, modulus_pa = 35e9, poisson = 0.25 }
+radius_m = [0.01, 0.02]
+speed_m_s = [1.0, 2.0]
+prior = 0.25
+[contact]
+law = "flores"
+restitution = 0.5
+[sensor]
+sample_rate_hz = 50000.0
+effective_mass_kg = 20.0
+counts_per_m_s2 = 10.0
+noise_rms_counts = 2.0
+adc_bits = 12
+accelerometer = { frequency_hz = 30000.0, damping_ratio = 0.05 }
+[[sensor.beam_modes]]
+frequency_hz = 200.0
+damping_ratio = 0.02
+gain = 0.1
+"#;
+        let s = SceneFile::from_toml_str(text).expect("parse");
+        assert_eq!(s.plate.material(), Material64::CARBON_STEEL);
+        assert!(matches!(s.classes[0].speed, SpeedSpec::DropHeight(_)));
+        assert_eq!(s.classes[1].prior, 0.25);
+        assert_eq!(s.contact, ContactLaw::Flores { restitution: 0.5 });
+        assert_eq!(s.sensor.beam_modes.len(), 1);
+        assert_eq!(s.sensor.adc_range(), (-2048, 2047));
+        let u = s.classes[0].speed_range_m_s();
+        assert!((u.min - (2.0f64 * 9.80665 * 0.5).sqrt()).abs() < 1e-12);
+    }
+}
