@@ -37,11 +37,18 @@ pub enum RejectReason {
     Gap,
     /// The measurement is not a finite positive force and duration.
     Implausible,
+    /// One peak, but not the Hertz shape: the energy-to-area ratio
+    /// `(sum v^2 / C_ENERGY F_max^2) / (sum v / C_AREA F_max)` departs from 1 by more than the
+    /// scene's `shape_tolerance` (two impacts within one contact, a distorted pulse).
+    Misshapen,
+    /// The baseline lagged a DC drift faster than it can follow: the pre-trigger samples sat
+    /// more than half the trigger level off it, so peak and area would be biased.
+    Drift,
 }
 
 impl RejectReason {
     /// Every reason, in the order [`crate::counters::Counters`] stores them.
-    pub const ALL: [RejectReason; 7] = [
+    pub const ALL: [RejectReason; 9] = [
         RejectReason::Saturated,
         RejectReason::Spike,
         RejectReason::PileUp,
@@ -49,6 +56,8 @@ impl RejectReason {
         RejectReason::Truncated,
         RejectReason::Gap,
         RejectReason::Implausible,
+        RejectReason::Misshapen,
+        RejectReason::Drift,
     ];
 
     /// Index into [`Self::ALL`].
@@ -66,6 +75,8 @@ impl RejectReason {
             RejectReason::Truncated => "truncated",
             RejectReason::Gap => "gap",
             RejectReason::Implausible => "implausible",
+            RejectReason::Misshapen => "misshapen",
+            RejectReason::Drift => "drift",
         }
     }
 }

@@ -7,10 +7,24 @@
 //! - Trigger: a sample above `baseline + max(trigger_sigmas * noise, 2)` counts starts a
 //!   pulse, which takes along the [`PRE_TRIGGER`] samples before it; the pulse ends after
 //!   `hold` samples below `baseline + max(release_sigmas * noise, 1)`.
-//! - Duration from the area: the Hertz pulse is `F(t) = F_max sin^(3/2)(pi t / t_c)` (within
-//!   2.4 % of `F_max`), whose area is `C_AREA F_max t_c` with
-//!   `C_AREA = Gamma(5/4) / (sqrt(pi) Gamma(7/4)) = 0.55641789`, so
+//! - Duration from the area: the area of the Hertz pulse is the impulse `2 m u`, and with
+//!   `t_c = 2.9432752 delta_max / u` and `F_max delta_max = (5/4) m u^2` that is
+//!   `C_AREA F_max t_c` with `C_AREA = 1.6 / 2.9432752 = 0.543612`, so
 //!   `t_c = area / (C_AREA F_max)`: unbiased by amplitude, unlike a threshold width.
+//! - Shape check: the pulse's energy `sum v^2 dt` is `C_ENERGY F_max^2 t_c` with
+//!   `C_ENERGY = 2 B(8/5, 1/2) / (2.5 * 2.9432752) = 0.411342`, so `t_energy = energy /
+//!   (C_ENERGY F_max^2)` must equal `t_area`; `q = t_energy / t_area` drops for two impacts
+//!   within one contact and rises for a flat (clipped) top. `|ln q|` beyond
+//!   `Settings::shape_tolerance` plus four noise sigmas rejects the pulse as `Misshapen`.
+//! - Spike on a pulse: the most negative second difference `v[i-1] - 2 v[i] + v[i+1]` of a
+//!   Hertz pulse is about `-1.65 pi^2 F_max / n^2` at its peak (`n` samples per pulse); one
+//!   below `-(2 * that + 0.3 F_max + 8 noise)` is a sample that jumped alone: `Spike`. A run of
+//!   three or more consecutive samples equal to the pulse's largest one, on a sensor with at
+//!   least one count of noise, is a clipped top: `Saturated`.
+//! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
+//!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
+//! - A sample below the baseline moves it by at most the trigger level (times the weight), so
+//!   a negative EMI spike cannot drag it down.
 //! - Peak between samples: `z = F^(2/3) = F_max^(2/3) sin(pi t / t_c)` is an exact sinusoid of
 //!   known frequency once `t_c` is known, so the maximum sample `z0` and its larger neighbour
 //!   `z1` give the offset `theta` of the true peak, `tan theta = (z1/z0 - cos D) / sin D`
@@ -25,8 +39,22 @@ use crate::scene::Scene;
 /// Samples kept before the trigger and added to the pulse.
 pub const PRE_TRIGGER: usize = 32;
 
-/// `C_AREA = integral_0^1 sin^(3/2)(pi x) dx = Gamma(5/4) / (sqrt(pi) Gamma(7/4))`.
-pub const C_AREA: f32 = 0.556_417_9;
+/// Area of the Hertz pulse over `F_max t_c`: `C_AREA = 1.6 / 2.9432752 = 0.5436104` (the
+/// impulse `2 m u` over `F_max t_c`).
+pub const C_AREA: f32 = 0.543_612_1;
+
+/// Energy `integral F^2 dt` of the Hertz pulse over `F_max^2 t_c`:
+/// `C_ENERGY = 2 B(8/5, 1/2) / (2.5 * 2.9432752) = 0.4113417`.
+pub const C_ENERGY: f32 = 0.411_341_7;
+
+/// Phase rate of `z = F^(2/3)` at the peak, in rad per `t_c`: the Hertz pulse bends there like
+/// `cos(PEAK_OMEGA t / t_c)`, with `PEAK_OMEGA = sqrt(5/4) 2.9432752` (from `z'' = -(5/4) z`
+/// at the peak, in the units `delta_max / u` where `t_c = 2.9432752`): 4.7 % faster than the
+/// `pi` of a sine.
+pub const PEAK_OMEGA: f32 = 3.290_681;
+
+/// Consecutive samples equal to a pulse's largest sample that make a clipped (flat) top.
+pub const FLAT_TOP_SAMPLES: u16 = 3;
 
 /// What the detector reports.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,6 +98,13 @@ enum State {
 struct Pulse {
     samples: u32,
     sum: f32,
+    sum_sq: f32,
+    prev: f32,
+    min_curvature: f32,
+    top: i32,
+    run: u16,
+    flat: u16,
+    drift: bool,
     max: f32,
     max_at: u64,
     before_max: f32,
@@ -88,6 +123,13 @@ impl Pulse {
     const EMPTY: Pulse = Pulse {
         samples: 0,
         sum: 0.0,
+        sum_sq: 0.0,
+        prev: 0.0,
+        min_curvature: 0.0,
+        top: 0,
+        run: 0,
+        flat: 0,
+        drift: false,
         max: f32::NEG_INFINITY,
         max_at: 0,
         before_max: 0.0,
@@ -110,6 +152,7 @@ pub struct Detector<M: Backend = DefaultBackend> {
     trigger: f32,
     release: f32,
     noise: f32,
+    shape_tolerance: f32,
     hold: u16,
     max_samples: u32,
     alpha: f32,
@@ -152,6 +195,7 @@ impl<M: Backend> Detector<M> {
             trigger: (s.trigger_sigmas * noise).max(2.0),
             release: (s.release_sigmas * noise).max(1.0),
             noise,
+            shape_tolerance: s.shape_tolerance,
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -214,7 +258,7 @@ impl<M: Backend> Detector<M> {
                 if v > self.trigger || sample >= self.adc_max {
                     return self.trigger(sample, index, false).or(stuck);
                 }
-                self.baseline += v * self.alpha;
+                self.baseline += v.max(-self.trigger) * self.alpha;
                 // Ring of the last PRE_TRIGGER samples (a power of two: the mask keeps the
                 // index in bounds, so the check compiles away).
                 if let Some(slot) = self.pre.get_mut(self.pre_next & (PRE_TRIGGER - 1)) {
@@ -267,7 +311,7 @@ impl<M: Backend> Detector<M> {
                 previous = x;
                 run = 0;
             }
-            baseline += v * alpha;
+            baseline += v.max(-trigger) * alpha;
             if let Some(slot) = self.pre.get_mut(next & (PRE_TRIGGER - 1)) {
                 *slot = x;
             }
@@ -384,7 +428,8 @@ impl<M: Backend> Detector<M> {
     }
 
     fn track_baseline(&mut self, sample: i32) {
-        self.baseline += (sample as f32 - self.baseline) * self.alpha;
+        let v = sample as f32 - self.baseline;
+        self.baseline += v.max(-self.trigger) * self.alpha;
     }
 
     /// Starts a pulse with the pre-trigger samples, oldest first.
@@ -394,13 +439,22 @@ impl<M: Backend> Detector<M> {
         let mut p = Pulse::EMPTY;
         let len = self.pre_next.wrapping_sub(self.pre_start).min(PRE_TRIGGER);
         let first = self.pre_next.wrapping_sub(len);
+        let old = len / 2;
+        let mut old_sum = 0.0;
         for k in 0..len {
             let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
             let w = self.pre.get(i).copied().unwrap_or(0) as f32 - self.baseline;
             p.samples += 1;
             p.sum += w;
+            p.sum_sq += w * w;
+            p.prev = p.last;
             p.last = w;
+            if k < old {
+                old_sum += w;
+            }
         }
+        // The oldest half of the pre-trigger samples: clear of the pulse's leading edge.
+        p.drift = old >= 4 && (old_sum / old as f32).abs() > 0.5 * self.trigger;
         p.after_gap = after_gap;
         self.pulse = p;
         self.state = State::Active;
@@ -413,18 +467,31 @@ impl<M: Backend> Detector<M> {
         let p = &mut self.pulse;
         p.samples = p.samples.saturating_add(1);
         p.sum += v;
+        p.sum_sq += v * v;
+        // Second difference at the previous sample.
+        p.min_curvature = p.min_curvature.min(p.prev + v - 2.0 * p.last);
+        p.prev = p.last;
         if sample >= self.adc_max || sample <= self.adc_min {
             p.saturated = true;
+        }
+        if sample == p.top {
+            p.run = p.run.saturating_add(1);
+            p.flat = p.flat.max(p.run);
+        } else {
+            p.run = 0;
         }
         if v > self.trigger {
             p.above_trigger = p.above_trigger.saturating_add(1);
         }
         if v > p.max {
             // A rise from a deep valley after an earlier peak is a second impact.
-            if p.max > 0.0 && second_peak(p.max, p.valley, v, self.trigger) {
+            if p.max > 0.0 && second_peak(p.max, p.valley, v, self.trigger, self.noise) {
                 p.pileup = true;
             }
             p.max = v;
+            p.top = sample;
+            p.run = 1;
+            p.flat = 1;
             p.max_at = index;
             p.before_max = p.last;
             p.after_known = false;
@@ -436,7 +503,7 @@ impl<M: Backend> Detector<M> {
             }
             if v < p.valley {
                 p.valley = v;
-            } else if second_peak(p.max, p.valley, v, self.trigger) {
+            } else if second_peak(p.max, p.valley, v, self.trigger, self.noise) {
                 p.pileup = true;
             }
         }
@@ -476,7 +543,7 @@ impl<M: Backend> Detector<M> {
             at_sample,
             outcome: Err(r),
         };
-        if p.saturated {
+        if p.saturated || (self.noise >= 1.0 && p.flat >= FLAT_TOP_SAMPLES) {
             return reject(RejectReason::Saturated);
         }
         let neighbour = if p.after_known {
@@ -493,14 +560,33 @@ impl<M: Backend> Detector<M> {
         if p.pileup {
             return reject(RejectReason::PileUp);
         }
+        if p.drift {
+            return reject(RejectReason::Drift);
+        }
         let (peak, duration) = match shape_fit::<M>(p.max, p.before_max, p.after_max, p.sum) {
             Some(v) => v,
             None => return reject(RejectReason::Implausible),
         };
+        // The sharpest bend a Hertz pulse of this peak and duration has (see the module docs).
+        let bend =
+            1.65 * core::f32::consts::PI * core::f32::consts::PI * peak / (duration * duration);
+        if p.min_curvature < -(2.0 * bend + 0.3 * peak + 8.0 * self.noise) {
+            return reject(RejectReason::Spike);
+        }
         let n = p.samples as f32;
         let sigma_ln_force = self.noise / peak;
         let sigma_area = self.noise * M::sqrt(n) / p.sum;
         let sigma_ln_duration = M::sqrt(sigma_area * sigma_area + sigma_ln_force * sigma_ln_force);
+        let energy = p.sum_sq - n * self.noise * self.noise;
+        let q = (energy * C_AREA) / (p.sum * peak * C_ENERGY);
+        let sigma_energy = 2.0 * self.noise / M::sqrt(energy.max(f32::MIN_POSITIVE));
+        let sigma_q = M::sqrt(
+            sigma_energy * sigma_energy + sigma_area * sigma_area + sigma_ln_force * sigma_ln_force,
+        );
+        let shape_ok = q > 0.0 && M::ln(q).abs() <= self.shape_tolerance + 4.0 * sigma_q;
+        if !shape_ok {
+            return reject(RejectReason::Misshapen);
+        }
         Detection::Pulse {
             at_sample,
             outcome: Ok(Measurement {
@@ -514,10 +600,11 @@ impl<M: Backend> Detector<M> {
 }
 
 /// A rise to `v` from a valley below `0.75 max` after the peak `max`, by more than
-/// `max(0.25 max, trigger)` and to above the trigger level: the start of a second impact.
+/// `max(0.25 max, trigger + 4 noise)` (so that noise on a long, low pulse is no second
+/// impact) and to above the trigger level: the start of a second impact.
 #[inline]
-fn second_peak(max: f32, valley: f32, v: f32, trigger: f32) -> bool {
-    v > trigger && valley < 0.75 * max && v - valley > (0.25 * max).max(trigger)
+fn second_peak(max: f32, valley: f32, v: f32, trigger: f32, noise: f32) -> bool {
+    v > trigger && valley < 0.75 * max && v - valley > (0.25 * max).max(trigger + 4.0 * noise)
 }
 
 /// Peak (counts) and duration (samples) of a sampled Hertz pulse from its largest sample
@@ -533,7 +620,7 @@ pub fn shape_fit<M: Backend>(y0: f32, before: f32, after: f32, sum: f32) -> Opti
     let mut duration = sum / (C_AREA * peak);
     for _ in 0..3 {
         // Phase step per sample; a pulse shorter than one sample is clamped to one.
-        let d = (core::f32::consts::PI / duration).min(core::f32::consts::PI);
+        let d = (PEAK_OMEGA / duration).min(core::f32::consts::PI);
         let (sh, ch) = math::sin_cos(0.5 * d.min(core::f32::consts::FRAC_PI_2));
         let b_max = z0 / ch;
         let b = if d >= 0.3 {

@@ -104,7 +104,9 @@ pub fn impact_in<M: Backend>(
     let u = positive(speed_m_s, "speed_m_s")?;
     let delta = representable(c_delta * r * M::powf(u, 0.8), "delta_max")?;
     let k = stiffness_in::<M>(effective_modulus_pa, r)?;
-    let f = representable(k * M::pow_3_2(delta), "peak force")?;
+    // delta^1.5 itself must be carried: a subnormal intermediate keeps only a few bits.
+    let delta_3_2 = representable(M::pow_3_2(delta), "delta_max^1.5")?;
+    let f = representable(k * delta_3_2, "peak force")?;
     let t = representable(CONTACT_TIME_FACTOR * delta / u, "contact duration")?;
     let m = sphere_mass_kg(density_kg_m3, r)?;
     let j = representable(2.0 * m * u, "impulse")?;

@@ -77,7 +77,8 @@ impl Backend for Micromath {
     const NAME: &'static str = "micromath";
     #[inline]
     fn sqrt(x: f32) -> f32 {
-        if !(x > 0.0 && x.is_finite()) {
+        // micromath's bit trick assumes a normal float: subnormals go to libm.
+        if !(x.is_normal() && x > 0.0) {
             return libm::sqrtf(x);
         }
         let y = micromath::F32Ext::sqrt(x);

@@ -147,6 +147,11 @@ pub struct Settings {
     pub out_sigmas: f32,
     /// Cells per side of the grid that integrates the separability at build time.
     pub separability_grid: u16,
+    /// Largest `|ln q|` of a pulse's shape ratio `q = t_energy / t_area` (1 for the Hertz
+    /// pulse, see [`crate::detector`]) beyond the noise's share, above which the pulse is
+    /// rejected as `Misshapen`. Raise it for a scene whose contact is damped (a damped pulse is
+    /// skewed: `ln q` down to -0.1 at restitution 0.5).
+    pub shape_tolerance: f32,
 }
 
 impl Default for Settings {
@@ -161,6 +166,7 @@ impl Default for Settings {
             confidence: 0.9,
             out_sigmas: 4.0,
             separability_grid: 48,
+            shape_tolerance: 0.02,
         }
     }
 }
@@ -173,6 +179,9 @@ impl Settings {
         positive(self.out_sigmas, "out_sigmas")?;
         if !self.model_sigma.is_finite() || self.model_sigma < 0.0 {
             return Err(Error::OutOfRange("model_sigma"));
+        }
+        if !(self.shape_tolerance.is_finite() && self.shape_tolerance > 0.0) {
+            return Err(Error::OutOfRange("shape_tolerance"));
         }
         if self.release_sigmas > self.trigger_sigmas {
             return Err(Error::InvertedRange("release_sigmas..trigger_sigmas"));

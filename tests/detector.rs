@@ -1,18 +1,16 @@
-//! The detector on sampled Hertz pulses `F_max sin^(3/2)(pi t / t_c)`: peak and duration
-//! errors over sample phases and rates, from ~3 to ~400 samples per pulse.
+//! The detector on sampled undamped Hertz pulses (the exact shape, integrated in
+//! `common`): peak and duration errors over sample phases and rates, from ~3 to ~400
+//! samples per pulse; clean pulses are never rejected.
 
-use coalshock::detector::{C_AREA, Detection, Detector, shape_fit};
+mod common;
+
+use coalshock::detector::{C_AREA, C_ENERGY, Detection, Detector, shape_fit};
 use coalshock::math::DefaultBackend;
 use coalshock::{Material, ParticleClass, Range, Scene, SensorChain, Settings, Speed};
 
-/// `sin^(3/2)` pulse value at time `t` (s) of a pulse starting at `t0` with peak `a`.
+/// Hertz pulse value at time `t` (s) of a pulse starting at `t0` with peak `a`.
 fn hertz_pulse(t: f64, t0: f64, tc: f64, a: f64) -> f64 {
-    let x = (t - t0) / tc;
-    if (0.0..=1.0).contains(&x) {
-        a * (std::f64::consts::PI * x).sin().powf(1.5)
-    } else {
-        0.0
-    }
+    a * common::hertz_shape((t - t0) / tc)
 }
 
 fn scene(rate_hz: f32, noise: f32) -> Scene {
@@ -37,18 +35,25 @@ fn scene(rate_hz: f32, noise: f32) -> Scene {
 }
 
 #[test]
-fn area_constant_matches_quadrature() {
-    // Midpoint rule on integral_0^1 sin^1.5(pi x) dx with 2e6 cells (independent of C_AREA).
-    let n = 2_000_000;
-    let s: f64 = (0..n)
-        .map(|i| {
-            (std::f64::consts::PI * (i as f64 + 0.5) / n as f64)
-                .sin()
-                .powf(1.5)
-        })
-        .sum::<f64>()
-        / n as f64;
-    assert!((s - C_AREA as f64).abs() < 1e-7, "{s}");
+fn shape_constants_match_quadrature() {
+    // Midpoint rule over the integrated pulse (independent of the kernel's constants), and
+    // the closed forms C_AREA = 1.6 / 2.9432752 and C_ENERGY = 2 B(8/5, 1/2) / (2.5 * 2.9432752).
+    let n = 200_000;
+    let (mut area, mut energy) = (0.0, 0.0);
+    for i in 0..n {
+        let f = common::hertz_shape((i as f64 + 0.5) / n as f64);
+        area += f;
+        energy += f * f;
+    }
+    let (area, energy) = (area / n as f64, energy / n as f64);
+    let tc = common::contact_time_factor();
+    assert!((tc / 2.943_275_184_3 - 1.0).abs() < 1e-7, "{tc}");
+    assert!((area / C_AREA as f64 - 1.0).abs() < 2e-6, "{area}");
+    assert!((1.6 / tc / C_AREA as f64 - 1.0).abs() < 1e-7);
+    assert!((energy / C_ENERGY as f64 - 1.0).abs() < 2e-6, "{energy}");
+    // B(8/5, 1/2) = Gamma(8/5) Gamma(1/2) / Gamma(21/10), with published Gamma values.
+    let beta = 0.893_515_349_287_690_3 * std::f64::consts::PI.sqrt() / 1.046_485_846_853_560_4;
+    assert!((2.0 * beta / (2.5 * tc) / C_ENERGY as f64 - 1.0).abs() < 1e-6);
 }
 
 /// Worst relative peak and duration error of `shape_fit` over 64 sample phases of noiseless
@@ -154,6 +159,19 @@ fn streaming_detector_over_rates() {
         assert_eq!(found, 40);
         assert!(ep < peak_bound, "rate {rate}: peak error {ep}");
         assert!(ed < dur_bound, "rate {rate}: duration error {ed}");
+    }
+}
+
+#[test]
+fn clean_pulses_of_any_amplitude_are_never_rejected() {
+    // 15 to 7000 noise RMS, 4 to 150 samples per pulse: the shape, spike, flat-top and drift
+    // checks must pass every clean pulse (`stream_errors` panics on a rejection).
+    for rate in [26_700.0, 100_000.0, 1_000_000.0] {
+        for amp in [60.0, 200.0, 1000.0, 8000.0, 28_000.0] {
+            let (ep, ed, found) = stream_errors(rate, 150e-6, amp, 4.0, 40);
+            println!("{rate:8} S/s, {amp:6} counts: peak {ep:.2e} duration {ed:.2e}");
+            assert_eq!(found, 40, "rate {rate} amp {amp}");
+        }
     }
 }
 

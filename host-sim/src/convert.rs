@@ -97,6 +97,7 @@ pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
     set(&mut s.model_sigma, o.model_sigma);
     set(&mut s.confidence, o.confidence);
     set(&mut s.out_sigmas, o.out_sigmas);
+    set(&mut s.shape_tolerance, o.shape_tolerance);
     if let Some(v) = o.hold_samples {
         s.hold_samples = v;
     }
@@ -156,6 +157,55 @@ pub fn measurement_from_kernel(m: &Measurement) -> Measurement64 {
         sigma_ln_force: m.sigma_ln_force as f64,
         sigma_ln_duration: m.sigma_ln_duration as f64,
     }
+}
+
+/// The kernel's closed-form impact (backend `M`, f32 arithmetic) in `f64`: maximum
+/// penetration (m), peak force (N), contact duration (s) and impulse (N s).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct KernelImpact64 {
+    /// `delta_max` in m.
+    pub delta_max_m: f64,
+    /// `F_max` in N.
+    pub peak_force_n: f64,
+    /// `t_c` in s.
+    pub duration_s: f64,
+    /// `2 m u` in N s.
+    pub impulse_n_s: f64,
+}
+
+/// The kernel's `hertz::impact_in::<M>` for a sphere of `sphere` material, radius `radius_m`
+/// (m) and speed `speed_m_s` (m/s) on a `plate`: every input rounded to f32 here, the
+/// effective modulus from the kernel's `material::effective_modulus_pa`, the result widened
+/// exactly to f64. Errors when the kernel refuses a value.
+pub fn kernel_impact_in<M: Backend>(
+    sphere: &Material64,
+    plate: &Material64,
+    radius_m: f64,
+    speed_m_s: f64,
+) -> Result<KernelImpact64, ConvertError> {
+    let s = material_to_kernel(sphere);
+    let e = coalshock::material::effective_modulus_pa(&s, &material_to_kernel(plate))
+        .map_err(ConvertError::Kernel)?;
+    let i = coalshock::hertz::impact_in::<M>(e, s.density_kg_m3, radius_m as f32, speed_m_s as f32)
+        .map_err(ConvertError::Kernel)?;
+    Ok(KernelImpact64 {
+        delta_max_m: i.delta_max_m as f64,
+        peak_force_n: i.peak_force_n as f64,
+        duration_s: i.duration_s as f64,
+        impulse_n_s: i.impulse_n_s as f64,
+    })
+}
+
+/// The kernel's build-time separability of a scene in `f64`: `(overlap_share, bayes_error)`,
+/// both prior-weighted shares in `[0, 1]` (see `coalshock::scene::Separability`), exact.
+pub fn separability_from_kernel(s: &coalshock::scene::Separability) -> (f64, f64) {
+    (s.overlap_share as f64, s.bayes_error as f64)
+}
+
+/// The shortest and longest Hertz contact duration of a kernel scene's classes, in s, exact.
+pub fn duration_bounds_from_kernel<const N: usize, M: Backend>(scene: &Scene<N, M>) -> (f64, f64) {
+    let (a, b) = scene.duration_bounds_s();
+    (a as f64, b as f64)
 }
 
 #[cfg(test)]

@@ -757,6 +757,10 @@ pub struct SettingsOverrides {
     /// Cells per side of the separability grid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub separability_grid: Option<u16>,
+    /// Largest `|ln q|` of the pulse shape ratio before a pulse is `Misshapen` (raise it for
+    /// a damped contact or a resonant sensor).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape_tolerance: Option<f64>,
 }
 
 impl SettingsOverrides {
