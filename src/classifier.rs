@@ -140,6 +140,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         if !ok(m.peak_force_n) || !ok(m.duration_s) {
             return Verdict::Rejected(RejectReason::Implausible);
         }
+        let m = &self.hertz_equivalent(m);
+        if !ok(m.peak_force_n) || !ok(m.duration_s) {
+            return Verdict::Rejected(RejectReason::Implausible);
+        }
         let s = self.settings();
         let model2 = s.model_sigma * s.model_sigma;
         let finite_or = |v: f32| if v.is_finite() { v } else { 0.0 };
@@ -199,10 +203,24 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         }
     }
 
-    /// The radius and speed class `class` would need for the measured pulse.
+    /// The radius and speed class `class` would need for the measured pulse (after
+    /// [`Scene::hertz_equivalent`]).
     pub fn invert(&self, class: u8, m: &Measurement) -> Option<Inverted> {
+        let h = self.hertz_equivalent(m);
         self.envelopes()
             .get(class as usize)
-            .map(|e| e.invert::<M>(m.peak_force_n, m.duration_s))
+            .map(|e| e.invert::<M>(h.peak_force_n, h.duration_s))
+    }
+
+    /// The undamped Hertz impact a measurement stands for: `F_max / force_ratio` and
+    /// `t_c / duration_ratio` of the scene's [`crate::ContactCalibration`]; the identity for an
+    /// undamped contact.
+    pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
+        let c = &self.settings().contact;
+        Measurement {
+            peak_force_n: m.peak_force_n / c.force_ratio,
+            duration_s: m.duration_s / c.duration_ratio,
+            ..*m
+        }
     }
 }

@@ -29,4 +29,4 @@ pub use envelope::{Envelope, Range, Side};
 pub use error::Error;
 pub use material::Material;
 pub use monitor::{Event, Monitor, Report};
-pub use scene::{ParticleClass, Scene, SensorChain, Settings, Speed};
+pub use scene::{ContactCalibration, ParticleClass, Scene, SensorChain, Settings, Speed};

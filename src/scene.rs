@@ -149,9 +149,54 @@ pub struct Settings {
     pub separability_grid: u16,
     /// Largest `|ln q|` of a pulse's shape ratio `q = t_energy / t_area` (1 for the Hertz
     /// pulse, see [`crate::detector`]) beyond the noise's share, above which the pulse is
-    /// rejected as `Misshapen`. Raise it for a scene whose contact is damped (a damped pulse is
-    /// skewed: `ln q` down to -0.1 at restitution 0.5).
+    /// rejected as `Misshapen`. A damped contact skews the pulse (`ln q` down to -0.1 at
+    /// restitution 0.5): its [`ContactCalibration::shape_ratio`] recentres the check, and a law
+    /// whose shape varies from impact to impact needs a wider tolerance.
     pub shape_tolerance: f32,
+    /// What the scene's contact does to a measured pulse against the undamped Hertz pulse of
+    /// the same impact ([`ContactCalibration::HERTZ`] for an undamped contact).
+    pub contact: ContactCalibration,
+}
+
+/// A damped contact against the undamped Hertz model, as the detector measures it: the ratios
+/// measured / Hertz of the peak force `F_max`, of the duration `area / (C_AREA F_max)` and of
+/// the shape ratio `q` (see [`crate::detector`]). The classifier divides a measurement by
+/// them before it compares it with the Hertz envelopes, and the shape check is centred on
+/// `shape_ratio`. For the restitution-parametrised laws (Hunt-Crossley, Flores, ...) they
+/// depend on the restitution alone, so one calibration holds for every impact of a scene;
+/// host-sim computes them from its integrator. Dimensionless; each in `1e-3..1e3`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ContactCalibration {
+    /// Measured peak force over the Hertz `F_max`.
+    pub force_ratio: f32,
+    /// Measured duration (from the area) over the Hertz `t_c`.
+    pub duration_ratio: f32,
+    /// Shape ratio `q` of the contact's pulse (1 for the Hertz pulse).
+    pub shape_ratio: f32,
+}
+
+impl ContactCalibration {
+    /// The undamped Hertz contact: every ratio 1 (the classifier's division is then exact).
+    pub const HERTZ: ContactCalibration = ContactCalibration {
+        force_ratio: 1.0,
+        duration_ratio: 1.0,
+        shape_ratio: 1.0,
+    };
+
+    fn check(&self) -> Result<(), Error> {
+        let ok = |v: f32| v.is_finite() && (1e-3..=1e3).contains(&v);
+        if !ok(self.force_ratio) {
+            return Err(Error::OutOfRange("contact.force_ratio"));
+        }
+        if !ok(self.duration_ratio) {
+            return Err(Error::OutOfRange("contact.duration_ratio"));
+        }
+        if !ok(self.shape_ratio) {
+            return Err(Error::OutOfRange("contact.shape_ratio"));
+        }
+        Ok(())
+    }
 }
 
 impl Default for Settings {
@@ -167,6 +212,7 @@ impl Default for Settings {
             out_sigmas: 4.0,
             separability_grid: 48,
             shape_tolerance: 0.02,
+            contact: ContactCalibration::HERTZ,
         }
     }
 }
@@ -183,6 +229,7 @@ impl Settings {
         if !(self.shape_tolerance.is_finite() && self.shape_tolerance > 0.0) {
             return Err(Error::OutOfRange("shape_tolerance"));
         }
+        self.contact.check()?;
         if self.release_sigmas > self.trigger_sigmas {
             return Err(Error::InvertedRange("release_sigmas..trigger_sigmas"));
         }

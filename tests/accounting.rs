@@ -28,56 +28,10 @@
 //! A report in no window (noise crossing the 6-RMS trigger: about 1e-9 per sample) is counted
 //! as spurious; it must not be a confident class, and there may be at most a handful.
 
-use coalshock::{Event, Material, Monitor, RejectReason, Report, Scene, Speed, Verdict};
+mod common;
 
-/// xorshift64* with Box-Muller normals.
-struct Rng {
-    state: u64,
-    spare: Option<f64>,
-}
-
-impl Rng {
-    fn new(seed: u64) -> Self {
-        Self {
-            state: seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1,
-            spare: None,
-        }
-    }
-    fn next_u64(&mut self) -> u64 {
-        let mut x = self.state;
-        x ^= x >> 12;
-        x ^= x << 25;
-        x ^= x >> 27;
-        self.state = x;
-        x.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next_u64() % n
-    }
-    fn normal(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        let (a, b) = (self.uniform(), self.uniform());
-        let r = (-2.0 * a.ln()).sqrt();
-        let t = std::f64::consts::TAU * b;
-        self.spare = Some(r * t.sin());
-        r * t.cos()
-    }
-}
-
-/// The textbook Hertz impact in f64: `(F_max in N, t_c in s)`.
-fn hertz64(particle: &Material, plate: &Material, r: f64, u: f64) -> (f64, f64) {
-    let c = |m: &Material| (1.0 - (m.poisson as f64).powi(2)) / m.modulus_pa as f64;
-    let e = 1.0 / (c(particle) + c(plate));
-    let m = particle.density_kg_m3 as f64 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
-    let k = 4.0 / 3.0 * e * r.sqrt();
-    let d = (5.0 * m * u * u / (4.0 * k)).powf(0.4);
-    (k * d.powf(1.5), 2.943_275_184_324_7 * d / u)
-}
+use coalshock::{Event, Monitor, RejectReason, Report, Scene, Speed, Verdict};
+use common::{Rng, hertz64};
 
 /// A pulse in slot-local sample units.
 #[derive(Debug, Clone, Copy)]
@@ -90,12 +44,7 @@ struct Pulse {
 
 impl Pulse {
     fn at(&self, i: usize) -> f64 {
-        let x = (i as f64 - self.start) / self.len;
-        if (0.0..=1.0).contains(&x) {
-            self.amp * (std::f64::consts::PI * x).sin().powf(1.5)
-        } else {
-            0.0
-        }
+        self.amp * common::hertz_shape((i as f64 - self.start) / self.len)
     }
     fn end(&self) -> usize {
         (self.start + self.len).ceil() as usize + 1

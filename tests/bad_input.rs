@@ -365,6 +365,35 @@ fn settings_fields() {
             p.settings.separability_grid = g
         });
     }
+    for v in [NAN, INF, -INF, 0.0, -0.02] {
+        expect(
+            &format!("shape_tolerance = {v}"),
+            Error::OutOfRange("shape_tolerance"),
+            |p| p.settings.shape_tolerance = v,
+        );
+    }
+    for v in [NAN, INF, 0.0, -1.0, 9e-4, 1.1e3] {
+        expect(
+            &format!("force_ratio = {v}"),
+            Error::OutOfRange("contact.force_ratio"),
+            |p| p.settings.contact.force_ratio = v,
+        );
+        expect(
+            &format!("duration_ratio = {v}"),
+            Error::OutOfRange("contact.duration_ratio"),
+            |p| p.settings.contact.duration_ratio = v,
+        );
+        expect(
+            &format!("shape_ratio = {v}"),
+            Error::OutOfRange("contact.shape_ratio"),
+            |p| p.settings.contact.shape_ratio = v,
+        );
+    }
+    accepted("contact ratios 0.5, 0.7, 0.9", |p| {
+        p.settings.contact.force_ratio = 0.5;
+        p.settings.contact.duration_ratio = 0.7;
+        p.settings.contact.shape_ratio = 0.9;
+    });
 }
 
 #[test]

@@ -1069,6 +1069,7 @@ fn settings_field() -> impl Strategy<Value = Settings> {
                 out_sigmas: out,
                 separability_grid: grid,
                 shape_tolerance: shape,
+                contact: coalshock::ContactCalibration::HERTZ,
             },
         )
 }

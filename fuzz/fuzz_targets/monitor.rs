@@ -154,6 +154,11 @@ impl Bytes<'_> {
             confidence: self.f32_in(0.51, 0.999),
             out_sigmas: self.f32_in(1.0, 10.0),
             shape_tolerance: self.f32_in(0.01, 1.0),
+            contact: coalshock::ContactCalibration {
+                force_ratio: self.f32_in(0.5, 2.0),
+                duration_ratio: self.f32_in(0.5, 2.0),
+                shape_ratio: self.f32_in(0.5, 2.0),
+            },
             // Mostly small grids: a 256-cell grid with four classes takes long to build.
             separability_grid: match self.u8() {
                 0..=239 => 2 + (self.u8() % 40) as u16,

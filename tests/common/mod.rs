@@ -1,8 +1,60 @@
-//! Shared by the test files: the exact shape of an undamped Hertz impact, integrated here in
+//! Shared by the test files: a seeded generator, the textbook impact in f64, and the exact
+//! shape of an undamped Hertz impact, integrated here in
 //! f64 from the equation of motion (independent of the kernel and its constants).
 #![allow(dead_code)]
 
 use std::sync::OnceLock;
+
+use coalshock::Material;
+
+/// xorshift64* with Box-Muller normals: small, seeded, reproducible.
+pub struct Rng {
+    state: u64,
+    spare: Option<f64>,
+}
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self {
+            state: seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1,
+            spare: None,
+        }
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        let mut x = self.state;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.state = x;
+        x.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    pub fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    pub fn below(&mut self, n: u64) -> u64 {
+        self.next_u64() % n
+    }
+    pub fn normal(&mut self) -> f64 {
+        if let Some(z) = self.spare.take() {
+            return z;
+        }
+        let (a, b) = (self.uniform(), self.uniform());
+        let r = (-2.0 * a.ln()).sqrt();
+        let t = std::f64::consts::TAU * b;
+        self.spare = Some(r * t.sin());
+        r * t.cos()
+    }
+}
+
+/// The textbook Hertz impact in f64: `(F_max in N, t_c in s)`.
+pub fn hertz64(particle: &Material, plate: &Material, r: f64, u: f64) -> (f64, f64) {
+    let c = |m: &Material| (1.0 - (m.poisson as f64).powi(2)) / m.modulus_pa as f64;
+    let e = 1.0 / (c(particle) + c(plate));
+    let m = particle.density_kg_m3 as f64 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+    let k = 4.0 / 3.0 * e * r.sqrt();
+    let d = (5.0 * m * u * u / (4.0 * k)).powf(0.4);
+    (k * d.powf(1.5), 2.943_275_184_324_7 * d / u)
+}
 
 /// The rising half of the normalised impact `y'' = -(5/4) y^(3/2)`, `y(0) = 0`, `y'(0) = 1`
 /// (`y = delta / delta_max`, `s = t u / delta_max`; `(5/4)` because `k delta_max^(5/2) =
