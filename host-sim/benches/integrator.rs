@@ -11,67 +11,9 @@ use std::hint::black_box;
 
 use criterion::{Criterion, Throughput};
 use host_sim::hertz64::HertzImpact64;
-use host_sim::impact::ImpactSpec;
-use host_sim::integrate::{
-    ContactProblem, ContactSolution, Limits, Method, SimError, Tolerance, integrate_contact,
-};
+use host_sim::integrate::{ContactProblem, Limits, Method, SimError, Tolerance, integrate_contact};
+use host_sim::integrator_cases::{PaperProblems, bench_ladder, paper_problems, relative_errors};
 use host_sim::laws::ForceLaw;
-
-/// A benchmarked configuration.
-struct Case {
-    label: String,
-    method: Method,
-    tol: Tolerance,
-}
-
-fn cases() -> Vec<Case> {
-    let mut out = Vec::new();
-    for rtol in [1e-3, 1e-6, 1e-9, 1e-12] {
-        out.push(Case {
-            label: format!("dopri5 rtol {rtol:.0e}"),
-            method: Method::Dopri5,
-            tol: Tolerance::new(rtol),
-        });
-    }
-    for n in [20, 50, 200] {
-        out.push(Case {
-            label: format!("rk4 {n} steps per t_c"),
-            method: Method::Rk4 { steps_per_tc: n },
-            tol: Tolerance::default(),
-        });
-    }
-    out
-}
-
-fn scene() -> Result<(HertzImpact64, ContactProblem, ContactProblem), SimError> {
-    let hertz = ImpactSpec::paper_scene().hertz()?;
-    let undamped = ContactProblem {
-        law: ForceLaw::Hertz {
-            stiffness: hertz.stiffness,
-            exponent: 1.5,
-        },
-        mass_kg: hertz.mass_kg,
-        speed_m_s: hertz.speed_m_s,
-        gravity_m_s2: 0.0,
-    };
-    let adams_law = ForceLaw::adams_for_restitution(
-        hertz.stiffness,
-        1.5,
-        1e-5,
-        hertz.mass_kg,
-        hertz.speed_m_s,
-        0.5,
-    )?;
-    let adams = ContactProblem {
-        law: adams_law,
-        ..undamped
-    };
-    Ok((hertz, undamped, adams))
-}
-
-fn solve(p: &ContactProblem, c: &Case) -> Result<ContactSolution, SimError> {
-    integrate_contact(p, c.method, c.tol, &Limits::default())
-}
 
 fn accuracy_table(
     hertz: &HertzImpact64,
@@ -95,7 +37,7 @@ fn accuracy_table(
     }
     println!("| law | method | rel. err F_max | rel. err t_c | force evals | steps | rejected |");
     println!("| --- | --- | --- | --- | --- | --- | --- |");
-    for c in cases() {
+    for c in bench_ladder() {
         for (name, p, f_ref, t_ref) in [
             ("undamped", undamped, hertz.peak_force_n, hertz.duration_s),
             (
@@ -105,16 +47,14 @@ fn accuracy_table(
                 reference.duration_s,
             ),
         ] {
-            match solve(p, &c) {
-                Ok(s) => println!(
-                    "| {name} | {} | {:.1e} | {:.1e} | {} | {} | {} |",
-                    c.label,
-                    (s.peak_force_n / f_ref - 1.0).abs(),
-                    (s.duration_s / t_ref - 1.0).abs(),
-                    s.work.force_evals,
-                    s.work.steps,
-                    s.work.rejected_steps
-                ),
+            match c.solve(p) {
+                Ok(s) => {
+                    let (e_f, e_t) = relative_errors(&s, f_ref, t_ref);
+                    println!(
+                        "| {name} | {} | {e_f:.1e} | {e_t:.1e} | {} | {} | {} |",
+                        c.label, s.work.force_evals, s.work.steps, s.work.rejected_steps
+                    )
+                }
                 Err(e) => println!("| {name} | {} | error: {e} | | | | |", c.label),
             }
         }
@@ -123,7 +63,11 @@ fn accuracy_table(
 }
 
 fn main() {
-    let (hertz, undamped, adams) = match scene() {
+    let PaperProblems {
+        hertz,
+        undamped,
+        adams,
+    } = match paper_problems() {
         Ok(s) => s,
         Err(e) => {
             eprintln!("cannot set up the paper scene: {e}");
@@ -138,9 +82,9 @@ fn main() {
     for (group_name, problem) in [("undamped", undamped), ("adams", adams)] {
         let mut group = crit.benchmark_group(group_name);
         group.throughput(Throughput::Elements(1));
-        for c in cases() {
+        for c in bench_ladder() {
             group.bench_function(c.label.as_str(), |b| {
-                b.iter(|| solve(black_box(&problem), &c).map(|s| s.peak_force_n))
+                b.iter(|| c.solve(black_box(&problem)).map(|s| s.peak_force_n))
             });
         }
         group.finish();

@@ -4,7 +4,10 @@
 
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
-use coalshock::{Material, Measurement, ParticleClass, Range, Scene, SensorChain, Settings, Speed};
+use coalshock::{
+    ContactCalibration, Material, Measurement, ParticleClass, Range, Scene, SensorChain, Settings,
+    Speed,
+};
 
 use crate::hertz64::Material64;
 use crate::scene::{ClassSpec, Range64, SceneFile, SensorSpec, SettingsOverrides, SpeedSpec};
@@ -15,6 +18,9 @@ pub enum ConvertError {
     /// The kernel refused the scene (its message names the parameter).
     #[error("the kernel refused the scene: {0}")]
     Kernel(coalshock::Error),
+    /// The damped contact could not be integrated for its calibration.
+    #[error("calibrating the contact law: {0}")]
+    Calibration(crate::integrate::SimError),
     /// More classes than the kernel scene's capacity `N`.
     #[error("the scene has {classes} classes; this kernel scene holds at most {capacity}")]
     TooManyClasses {
@@ -98,6 +104,12 @@ pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
     set(&mut s.confidence, o.confidence);
     set(&mut s.out_sigmas, o.out_sigmas);
     set(&mut s.shape_tolerance, o.shape_tolerance);
+    let ratio = |v: Option<f64>| v.unwrap_or(1.0) as f32;
+    s.contact = ContactCalibration {
+        force_ratio: ratio(o.force_ratio),
+        duration_ratio: ratio(o.duration_ratio),
+        shape_ratio: ratio(o.shape_ratio),
+    };
     if let Some(v) = o.hold_samples {
         s.hold_samples = v;
     }
@@ -130,9 +142,36 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
         material_to_kernel(&scene.plate.material()),
         &classes,
         sensor_to_kernel(&scene.sensor),
-        settings_to_kernel(&scene.settings),
+        calibrated_settings(scene)?,
     )
     .map_err(ConvertError::Kernel)
+}
+
+/// The kernel settings of a scene file: [`settings_to_kernel`], and for a damped contact
+/// law the calibration of [`crate::calibrate::calibrate`] (each ratio unless the file gives
+/// it). A law whose ratios vary between impacts widens the tolerances to cover them:
+/// `shape_tolerance >= 1.5 x` the spread of `ln q`, `model_sigma >= ` the larger spread of
+/// `ln F` and `ln t` (unless the file sets them).
+pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> {
+    let mut s = settings_to_kernel(&scene.settings);
+    let o = &scene.settings;
+    let cal = crate::calibrate::calibrate(scene).map_err(ConvertError::Calibration)?;
+    let pick = |given: Option<f64>, computed: Option<f64>| given.or(computed).unwrap_or(1.0) as f32;
+    s.contact = ContactCalibration {
+        force_ratio: pick(o.force_ratio, cal.map(|c| c.ratios.force)),
+        duration_ratio: pick(o.duration_ratio, cal.map(|c| c.ratios.duration)),
+        shape_ratio: pick(o.shape_ratio, cal.map(|c| c.ratios.shape)),
+    };
+    if let Some(c) = cal {
+        if o.shape_tolerance.is_none() {
+            s.shape_tolerance = s.shape_tolerance.max((1.5 * c.spread_ln.shape) as f32);
+        }
+        if o.model_sigma.is_none() {
+            let spread = c.spread_ln.force.max(c.spread_ln.duration) as f32;
+            s.model_sigma = s.model_sigma.max(spread);
+        }
+    }
+    Ok(s)
 }
 
 /// A kernel measurement in `f64`: peak force (N), duration (s) and their log-unit standard

@@ -2,13 +2,17 @@
 //! model and contact integrator used to generate and check pulses.
 
 pub mod bayes;
+pub mod calibrate;
 pub mod convert;
+pub mod evaluate;
 pub mod hertz64;
 pub mod impact;
 pub mod impact_cli;
 pub mod integrate;
+pub mod integrator_cases;
 pub mod laws;
 pub mod paper;
 pub mod scene;
 pub mod sensor;
 pub mod stream;
+pub mod tradeoff;

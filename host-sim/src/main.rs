@@ -2,7 +2,9 @@
 //!
 //! - `host-sim paper`: the paper's scene, Table 3 and Figs 2-11 (see `PAPER.md`);
 //! - `host-sim impact`: one impact, or a batch of impacts from a CSV file;
-//! - `host-sim stream`: a labelled sample stream (`.bin` + `.truth.csv`, see `FORMATS.md`).
+//! - `host-sim stream`: a labelled sample stream (`.bin` + `.truth.csv`, see `FORMATS.md`);
+//! - `host-sim evaluate`: the kernel scored on a scene against the Bayes limit (see
+//!   `host_sim::evaluate`, JSON fields in `FORMATS.md`).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -38,6 +40,12 @@ enum Command {
     Impact(host_sim::impact_cli::ImpactArgs),
     /// Generate a labelled sample stream: OUT.bin (little-endian i16) and OUT.truth.csv.
     Stream(StreamArgs),
+    /// Evaluate the kernel on N impacts per class: confusion matrix, forced-choice accuracy,
+    /// coverage, confident errors, against the Bayes limit and the oracle.
+    Evaluate(host_sim::evaluate::EvaluateArgs),
+    /// Measure what each knob buys and costs (math backend, separability grid, integrator,
+    /// sample rate): a markdown table, CSV files and SVG Pareto plots.
+    Tradeoff(host_sim::tradeoff::TradeoffArgs),
 }
 
 /// How each impact's force pulse is made.
@@ -197,7 +205,43 @@ fn main() -> Result<()> {
         Command::Paper(args) => host_sim::paper::run(args),
         Command::Impact(args) => host_sim::impact_cli::run(args),
         Command::Stream(args) => run_stream(args),
+        Command::Evaluate(args) => run_evaluate(args),
+        Command::Tradeoff(args) => host_sim::tradeoff::run(args),
     }
+}
+
+/// `host-sim evaluate`: tables on stdout (or one JSON object with `--json`), progress on a
+/// terminal's stderr.
+fn run_evaluate(args: &host_sim::evaluate::EvaluateArgs) -> Result<()> {
+    let scene = scene::load(&args.scene)?;
+    let bar = ProgressBar::new(0);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("evaluating [{bar:40}] {pos}/{len} impacts ({eta})")
+                .context("progress bar template")?
+                .progress_chars("=> "),
+        );
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let eval = host_sim::evaluate::evaluate_backend(
+        args.backend,
+        &scene,
+        &args.options(),
+        &mut |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    );
+    bar.finish_and_clear();
+    let eval = eval.with_context(|| format!("evaluating {}", args.scene.display()))?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&eval)?);
+    } else {
+        print!("{}", eval.table());
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -888,17 +888,27 @@ pub fn write_csvs(res: &PaperResults, dir: &Path) -> anyhow::Result<Vec<PathBuf>
 
 /// How a curve is drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Stroke {
+pub(crate) enum Stroke {
+    /// A solid line.
     Solid,
+    /// A dashed line.
     Dashed,
+    /// Circles at every other point.
     Markers,
+    /// Filled dots at every point.
+    Points,
 }
 
-struct Curve {
-    label: String,
-    points: Vec<(f64, f64)>,
-    color: RGBColor,
-    stroke: Stroke,
+/// One labelled curve of a figure.
+pub(crate) struct Curve {
+    /// Legend text.
+    pub(crate) label: String,
+    /// `(x, y)` in axis units.
+    pub(crate) points: Vec<(f64, f64)>,
+    /// Colour.
+    pub(crate) color: RGBColor,
+    /// How it is drawn.
+    pub(crate) stroke: Stroke,
 }
 
 fn padded_range(values: impl Iterator<Item = f64>, from_zero: bool) -> (f64, f64) {
@@ -916,12 +926,15 @@ fn padded_range(values: impl Iterator<Item = f64>, from_zero: bool) -> (f64, f64
     )
 }
 
-fn draw_svg(
+/// Draws `curves` on linear axes into the SVG file `path` (900 x 600) with a legend in the
+/// upper left; the y axis starts at zero when `y_from_zero` (or below, for negative values).
+pub(crate) fn draw_svg(
     path: &Path,
     caption: &str,
     x_desc: &str,
     y_desc: &str,
     curves: &[Curve],
+    y_from_zero: bool,
 ) -> anyhow::Result<()> {
     let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE)?;
@@ -931,7 +944,7 @@ fn draw_svg(
     );
     let (y0, y1) = padded_range(
         curves.iter().flat_map(|c| c.points.iter().map(|p| p.1)),
-        true,
+        y_from_zero,
     );
     let mut chart = ChartBuilder::on(&root)
         .caption(caption, ("sans-serif", 22))
@@ -978,6 +991,12 @@ fn draw_svg(
                     )?
                     .label(c.label.as_str())
                     .legend(move |(x, y)| Circle::new((x + 12, y), 4, color.stroke_width(1)));
+            }
+            Stroke::Points => {
+                chart
+                    .draw_series(c.points.iter().map(|&p| Circle::new(p, 5, color.filled())))?
+                    .label(c.label.as_str())
+                    .legend(move |(x, y)| Circle::new((x + 12, y), 5, color.filled()));
             }
         }
     }
@@ -1080,7 +1099,7 @@ pub fn write_svgs(res: &PaperResults, dir: &Path) -> anyhow::Result<Vec<PathBuf>
     let mut paths = Vec::new();
     for (file, caption, xl, yl, cs) in specs {
         let path = dir.join(file);
-        draw_svg(&path, caption, xl, yl, &cs)?;
+        draw_svg(&path, caption, xl, yl, &cs, true)?;
         paths.push(path);
     }
     Ok(paths)

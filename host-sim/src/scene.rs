@@ -761,6 +761,16 @@ pub struct SettingsOverrides {
     /// a damped contact or a resonant sensor).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape_tolerance: Option<f64>,
+    /// The contact's measured / Hertz peak-force ratio (default: from the integrator for a
+    /// damped law, 1 for Hertz; see `calibrate`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_ratio: Option<f64>,
+    /// The contact's measured / Hertz duration ratio (default as `force_ratio`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duration_ratio: Option<f64>,
+    /// The contact's pulse shape ratio `q` (default as `force_ratio`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shape_ratio: Option<f64>,
 }
 
 impl SettingsOverrides {

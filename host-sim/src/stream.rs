@@ -457,6 +457,39 @@ pub fn generate_with_progress(
     options: &StreamOptions,
     progress: &mut dyn FnMut(usize),
 ) -> Result<Stream, StreamError> {
+    generate_inner(scene, None, n_impacts, seed, options, progress)
+}
+
+/// [`generate`] with every impact of class `class` (index in the scene's order) instead of a
+/// class drawn from the priors; radius, speed, timing, noise and faults are drawn exactly as
+/// [`generate`] draws them. A class index out of range is an option error.
+pub fn generate_class(
+    scene: &SceneFile,
+    class: usize,
+    n_impacts: usize,
+    seed: u64,
+    options: &StreamOptions,
+) -> Result<Stream, StreamError> {
+    if class >= scene.classes.len() {
+        return Err(opt_err(
+            "class",
+            format!(
+                "must be a class index below {} (got {class})",
+                scene.classes.len()
+            ),
+        ));
+    }
+    generate_inner(scene, Some(class), n_impacts, seed, options, &mut |_| {})
+}
+
+fn generate_inner(
+    scene: &SceneFile,
+    fixed_class: Option<usize>,
+    n_impacts: usize,
+    seed: u64,
+    options: &StreamOptions,
+    progress: &mut dyn FnMut(usize),
+) -> Result<Stream, StreamError> {
     scene.validate()?;
     options.validate()?;
     let faults = &options.faults;
@@ -477,13 +510,15 @@ pub fn generate_with_progress(
             (rng.random(), rng.random(), rng.random());
         let (r_pile, r_gap, r_offset): (f64, f64, f64) = (rng.random(), rng.random(), rng.random());
         let mut acc = 0.0;
-        let class = probs
-            .iter()
-            .position(|p| {
-                acc += p;
-                r_class < acc
-            })
-            .unwrap_or(probs.len() - 1);
+        let class = fixed_class.unwrap_or_else(|| {
+            probs
+                .iter()
+                .position(|p| {
+                    acc += p;
+                    r_class < acc
+                })
+                .unwrap_or(probs.len() - 1)
+        });
         let c = &scene.classes[class];
         let (r0, r1) = (c.radius_m.min.ln(), c.radius_m.max.ln());
         let radius_m = (r0 + r_radius * (r1 - r0)).exp();

@@ -1,0 +1,121 @@
+//! The calibration of a damped contact against the undamped Hertz model, as the kernel's
+//! detector measures a pulse: for each impact the ratios measured / Hertz of
+//!
+//! - the peak force, `F_peak / F_max`;
+//! - the duration from the area, `(A / (C_AREA F_peak)) / t_c`, with `A = integral F dt`;
+//! - the shape ratio `q = (E / (C_ENERGY F_peak^2)) / (A / (C_AREA F_peak))`, `E = integral F^2 dt`
+//!   (1 for the Hertz pulse).
+//!
+//! The pulse comes from the f64 integrator with the scene's law; `C_AREA` and `C_ENERGY` are the
+//! closed forms of the Hertz pulse (written here from their formulas, not taken from the
+//! kernel). For the restitution-parametrised laws the ratios depend on the restitution alone;
+//! for Adams (a fixed `c_max` and penetration depth) they vary with size and speed, which the
+//! reported spread shows.
+
+use crate::hertz64::HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR;
+use crate::impact::{ImpactSpec, simulate};
+use crate::integrate::SimError;
+use crate::scene::{ContactLaw, SceneFile};
+
+/// Area of the Hertz pulse over `F_max t_c`: `1.6 / 2.9432752` (the impulse `2 m u`).
+pub const C_AREA: f64 = 1.6 / CONTACT_TIME_FACTOR;
+
+/// Energy `integral F^2 dt` of the Hertz pulse over `F_max^2 t_c`:
+/// `2 B(8/5, 1/2) / (2.5 * 2.9432752)`, `B(8/5, 1/2) = Gamma(8/5) sqrt(pi) / Gamma(21/10)`.
+pub const C_ENERGY: f64 = 2.0 * 0.893_515_349_287_690_3 * 1.772_453_850_905_516
+    / 1.046_485_846_853_560_7
+    / (2.5 * CONTACT_TIME_FACTOR);
+
+/// Points recorded per Hertz contact time when a pulse is integrated for calibration.
+const POINTS_PER_PULSE: f64 = 4000.0;
+
+/// The three ratios of one impact (dimensionless).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PulseRatios {
+    /// Peak force over the Hertz `F_max`.
+    pub force: f64,
+    /// Duration from the area over the Hertz `t_c`.
+    pub duration: f64,
+    /// Shape ratio `q`.
+    pub shape: f64,
+}
+
+/// The calibration of a scene's contact: the geometric means of the ratios over its classes'
+/// corners and centres, and the largest `|ln|` deviation of any impact from them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Calibration64 {
+    /// Geometric-mean ratios.
+    pub ratios: PulseRatios,
+    /// Largest `|ln ratio - ln mean|` of each ratio over the impacts (log units).
+    pub spread_ln: PulseRatios,
+    /// Impacts integrated.
+    pub impacts: usize,
+}
+
+/// The ratios of one impact, from its integrated force-time series (trapezoid sums on
+/// `POINTS_PER_PULSE` points per Hertz contact time).
+pub fn pulse_ratios(spec: &ImpactSpec) -> Result<PulseRatios, SimError> {
+    let hertz = spec.hertz()?;
+    let mut spec = spec.clone();
+    spec.record = Some(hertz.duration_s / POINTS_PER_PULSE);
+    let report = simulate(&spec)?;
+    let series = report.force_series.unwrap_or_default();
+    let (mut area, mut energy, mut peak) = (0.0f64, 0.0f64, 0.0f64);
+    for w in series.windows(2) {
+        let (t0, f0) = (w[0].0, w[0].1.max(0.0));
+        let (t1, f1) = (w[1].0, w[1].1.max(0.0));
+        area += 0.5 * (t1 - t0) * (f0 + f1);
+        energy += 0.5 * (t1 - t0) * (f0 * f0 + f1 * f1);
+        peak = peak.max(f1);
+    }
+    let peak = peak.max(report.peak_force_n);
+    let t_area = area / (C_AREA * peak);
+    let t_energy = energy / (C_ENERGY * peak * peak);
+    Ok(PulseRatios {
+        force: peak / hertz.peak_force_n,
+        duration: t_area / hertz.duration_s,
+        shape: t_energy / t_area,
+    })
+}
+
+/// The calibration of `scene`'s contact law, or `None` for the undamped Hertz law (the
+/// kernel's own model: every ratio is 1). Integrates each class at radius {min, geometric
+/// centre, max} x speed {min, centre, max}.
+pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
+    if scene.contact == ContactLaw::Hertz {
+        return Ok(None);
+    }
+    let plate = scene.plate.material();
+    let mut all = Vec::new();
+    for class in &scene.classes {
+        let (r, u) = (class.radius_m, class.speed_range_m_s());
+        for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
+            for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
+                let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
+                spec.law = scene.contact.law_spec();
+                all.push(pulse_ratios(&spec)?);
+            }
+        }
+    }
+    let n = all.len() as f64;
+    let mean = |f: fn(&PulseRatios) -> f64| all.iter().map(|p| f(p).ln()).sum::<f64>() / n;
+    let (lf, ld, ls) = (mean(|p| p.force), mean(|p| p.duration), mean(|p| p.shape));
+    let spread = |f: fn(&PulseRatios) -> f64, m: f64| {
+        all.iter()
+            .map(|p| (f(p).ln() - m).abs())
+            .fold(0.0, f64::max)
+    };
+    Ok(Some(Calibration64 {
+        ratios: PulseRatios {
+            force: lf.exp(),
+            duration: ld.exp(),
+            shape: ls.exp(),
+        },
+        spread_ln: PulseRatios {
+            force: spread(|p| p.force, lf),
+            duration: spread(|p| p.duration, ld),
+            shape: spread(|p| p.shape, ls),
+        },
+        impacts: all.len(),
+    }))
+}

@@ -1,0 +1,261 @@
+//! `host_sim::evaluate`: the kernel scored end to end on drawn impacts. Small draws keep the
+//! suite fast in debug builds; the bands below are stated against the statistical error of
+//! each figure (3 standard errors) plus a fixed allowance:
+//!
+//! - paper_narrow (classes separate): forced-choice accuracy >= 97 %, confident errors <= 1 %,
+//!   oracle exactly 1;
+//! - paper (classes overlap, limit about 76 %): forced choice within 1 percentage point plus
+//!   3 standard errors of the Bayes limit, and the kernel's paired loss against the Bayes
+//!   decision on its own measurements at most 1 point plus 3 standard errors;
+//! - the oracle (noise-free) is at least the Bayes limit with noise, less 3 standard errors;
+//! - every impact lands in exactly one cell of its row; one seed gives one result;
+//! - every scene shipped in `scenes/` loads, converts and evaluates.
+
+use coalshock::math::{DefaultBackend, Libm};
+use host_sim::convert::scene_to_kernel;
+use host_sim::evaluate::{EvalError, EvalOptions, Evaluation, evaluate};
+use host_sim::scene::{self, SceneFile};
+use host_sim::stream::{StreamOptions, generate_class};
+
+fn options(n_per_class: usize, seed: u64) -> EvalOptions {
+    EvalOptions {
+        n_per_class,
+        seed,
+        bayes_draws_per_class: 1500,
+        ..EvalOptions::default()
+    }
+}
+
+/// Every row of both matrices sums to the impacts per class, and the counts agree.
+fn check_accounting(e: &Evaluation) {
+    let k = e.classes.len();
+    assert_eq!(e.columns.len(), k + 4);
+    assert_eq!(e.confusion.len(), k);
+    assert_eq!(e.forced_confusion.len(), k);
+    let mut detected = 0u64;
+    for (i, (row, forced)) in e.confusion.iter().zip(&e.forced_confusion).enumerate() {
+        assert_eq!(
+            row.iter().sum::<u64>(),
+            e.n_per_class as u64,
+            "row {i}: {row:?}"
+        );
+        assert_eq!(
+            forced.iter().sum::<u64>(),
+            e.n_per_class as u64,
+            "{forced:?}"
+        );
+        let c = &e.per_class[i];
+        assert_eq!(c.impacts, e.n_per_class as u64);
+        assert_eq!(c.detected + row[k + 3], c.impacts, "missed column");
+        assert_eq!(c.decided, row[..k].iter().sum::<u64>());
+        assert_eq!(c.decided_right, row[i]);
+        assert_eq!(c.forced_right, forced[i]);
+        // Rejected and missed impacts have no forced choice.
+        assert_eq!(forced[k], row[k + 2] + row[k + 3]);
+        detected += c.detected;
+    }
+    assert_eq!(e.pulses_detected, detected + e.spurious_reports);
+    assert_eq!(
+        e.rejected_by_reason.values().sum::<u64>(),
+        e.confusion.iter().map(|r| r[k + 2]).sum::<u64>()
+    );
+    for v in [
+        e.forced_choice_accuracy,
+        e.coverage,
+        e.confident_error_rate,
+        e.bayes_accuracy,
+        e.oracle_accuracy,
+        e.bayes_on_measured_accuracy,
+    ] {
+        assert!((0.0..=1.0).contains(&v), "{v}");
+    }
+    assert!(e.samples_fed > 0 && e.kernel_seconds >= 0.0);
+}
+
+#[test]
+fn narrow_scene_is_decided_and_right() {
+    let e = evaluate::<DefaultBackend>(&SceneFile::paper_narrow(), &options(100, 3))
+        .expect("evaluates");
+    check_accounting(&e);
+    println!("{}", e.table());
+    assert!(
+        e.forced_choice_accuracy >= 0.97,
+        "{}",
+        e.forced_choice_accuracy
+    );
+    assert!(e.confident_error_rate <= 0.01, "{}", e.confident_error_rate);
+    assert!(e.coverage >= 0.97, "{}", e.coverage);
+    assert_eq!(e.missed_share, 0.0);
+    assert_eq!(e.oracle_accuracy, 1.0);
+    assert!(e.bayes_accuracy >= 0.99, "{}", e.bayes_accuracy);
+}
+
+#[test]
+fn paper_scene_is_near_the_bayes_limit() {
+    let o = EvalOptions {
+        bayes_draws_per_class: 10_000,
+        ..options(1000, 5)
+    };
+    let e = evaluate::<Libm>(&SceneFile::paper(), &o).expect("evaluates");
+    check_accounting(&e);
+    println!("{}", e.table());
+    // The limit itself: the scene's classes overlap, about 76 % at best.
+    assert!(
+        (0.72..0.80).contains(&e.bayes_accuracy),
+        "{}",
+        e.bayes_accuracy
+    );
+    let se = e.forced_choice_std_error.hypot(e.bayes_std_error);
+    assert!(
+        (e.forced_choice_accuracy - e.bayes_accuracy).abs() <= 0.01 + 3.0 * se,
+        "forced choice {} against the limit {} (se {se})",
+        e.forced_choice_accuracy,
+        e.bayes_accuracy
+    );
+    let p = e.kernel_vs_bayes_on_measured;
+    assert!(
+        p.difference >= -0.01 - 3.0 * p.std_error,
+        "the kernel loses {p:?} against the Bayes decision on its measurements"
+    );
+    // Overlap is reported, not guessed: confident errors stay rare.
+    assert!(e.confident_error_rate <= 0.02, "{}", e.confident_error_rate);
+    assert!(e.ambiguous_share > 0.1, "{}", e.ambiguous_share);
+}
+
+#[test]
+fn oracle_is_at_least_the_noisy_bayes_limit() {
+    let e = evaluate::<DefaultBackend>(&SceneFile::paper(), &options(300, 8)).expect("evaluates");
+    let n = (2 * e.n_per_class) as f64;
+    let se_oracle = (e.oracle_accuracy * (1.0 - e.oracle_accuracy) / n).sqrt();
+    let se = se_oracle.hypot(e.bayes_std_error);
+    assert!(
+        e.oracle_accuracy >= e.bayes_accuracy - 3.0 * se,
+        "oracle {} below the limit {} (se {se})",
+        e.oracle_accuracy,
+        e.bayes_accuracy
+    );
+    // The oracle is the kernel's own noiseless ceiling, computed independently.
+    assert!(
+        (e.oracle_accuracy - (1.0 - e.kernel_bayes_error)).abs() <= 3.0 * se_oracle + 0.005,
+        "oracle {} against the kernel's grid {}",
+        e.oracle_accuracy,
+        1.0 - e.kernel_bayes_error
+    );
+}
+
+#[test]
+fn rejected_impacts_stay_in_their_rows() {
+    let mut o = options(40, 9);
+    o.stream = StreamOptions {
+        faults: host_sim::stream::FaultOptions {
+            saturate_share: 0.5,
+            ..Default::default()
+        },
+        ..StreamOptions::default()
+    };
+    let e = evaluate::<DefaultBackend>(&SceneFile::paper(), &o).expect("evaluates");
+    check_accounting(&e);
+    let saturated = e.rejected_by_reason.get("saturated").copied().unwrap_or(0);
+    assert!(saturated >= 20, "{:?}", e.rejected_by_reason);
+    assert!(e.rejected_share > 0.25, "{}", e.rejected_share);
+    // Rejected impacts are wrong in the forced choice.
+    assert!(e.forced_choice_accuracy <= 1.0 - e.rejected_share + 1e-12);
+}
+
+#[test]
+fn a_seed_gives_one_result() {
+    let scene = SceneFile::paper();
+    let run = |seed| {
+        let mut e = evaluate::<DefaultBackend>(&scene, &options(30, seed)).expect("evaluates");
+        // The only fields that depend on the machine.
+        e.kernel_seconds = 0.0;
+        e.kernel_ns_per_sample = 0.0;
+        serde_json::to_string(&e).expect("serializes")
+    };
+    let a = run(11);
+    assert_eq!(a, run(11));
+    assert_ne!(a, run(12));
+    let v: serde_json::Value = serde_json::from_str(&a).expect("parses");
+    for field in [
+        "confusion",
+        "forced_choice_accuracy",
+        "coverage",
+        "confident_error_rate",
+        "bayes_accuracy",
+        "oracle_accuracy",
+        "samples_fed",
+        "pulses_detected",
+        "kernel_seconds",
+        "classes",
+        "noise",
+    ] {
+        assert!(v.get(field).is_some(), "JSON without {field}");
+    }
+}
+
+#[test]
+fn every_shipped_scene_evaluates() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("scenes");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).expect("scenes directory") {
+        let path = entry.expect("entry").path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let file = scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        scene_to_kernel(&file).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let e = evaluate::<DefaultBackend>(
+            &file,
+            &EvalOptions {
+                bayes_draws_per_class: 200,
+                ..options(12, 1)
+            },
+        )
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        check_accounting(&e);
+        assert_eq!(e.classes.len(), file.classes.len());
+        names.push(file.name);
+    }
+    for expected in [
+        "paper",
+        "paper_narrow",
+        "roof_rock",
+        "mems_26k",
+        "noisy",
+        "paper_damped",
+    ] {
+        assert!(names.iter().any(|n| n == expected), "{expected}: {names:?}");
+    }
+}
+
+#[test]
+fn options_are_checked() {
+    let scene = SceneFile::paper();
+    for o in [
+        options(0, 1),
+        EvalOptions {
+            impacts_per_stream: 0,
+            ..options(5, 1)
+        },
+        EvalOptions {
+            bayes_draws_per_class: 0,
+            ..options(5, 1)
+        },
+    ] {
+        assert!(matches!(
+            evaluate::<DefaultBackend>(&scene, &o),
+            Err(EvalError::Option { .. })
+        ));
+    }
+}
+
+#[test]
+fn class_streams_hold_one_class() {
+    let scene = SceneFile::paper();
+    let s = generate_class(&scene, 1, 20, 4, &StreamOptions::default()).expect("stream");
+    assert_eq!(s.truth.len(), 20);
+    assert!(s.truth.iter().all(|t| t.class == 1));
+    assert!(generate_class(&scene, 2, 5, 4, &StreamOptions::default()).is_err());
+}
