@@ -1,15 +1,17 @@
 //! The coalshock kernel on a Cortex-M4F node (STM32F405 class, QEMU `netduinoplus2`).
 //!
-//! The firmware replays the recorded sample stream `examples/data/paper_stream.bin`
-//! (little-endian i16 ADC counts at 100 kS/s) through the kernel and exits through
-//! semihosting (status 0 when everything ran and agreed, 1 otherwise):
+//! The firmware replays the sample stream `examples/data/paper_stream.bin` that host-sim made
+//! from the paper scene (`fw/stream.sh`: little-endian i16 ADC counts at 100 kS/s, with the
+//! dropped samples of `paper_stream.truth.csv` reported through `Monitor::gap` at their place)
+//! through the kernel and exits through semihosting (status 0 when everything ran and agreed,
+//! 1 otherwise):
 //!
 //! 1. two measuring passes, one per math backend (`Libm`, `Micromath`): the paper scene is
 //!    built, then every `feed` is timed with SysTick (deterministic under QEMU's
 //!    `-icount shift=0`: one instruction per virtual nanosecond, calibrated against a counted
 //!    loop) and the stack below the caller is painted and scanned; no logging;
-//! 2. a logging pass with the default backend: one `pulse ...` line per pulse verdict and
-//!    the counters, then the `measure` lines (`fw/README.md` defines every key).
+//! 2. a logging pass with the default backend: one line per event (pulse verdict or stuck
+//!    sensor) and the counters, then the `measure` lines (`fw/README.md` defines every key).
 //!
 //! Output lines (defmt, decoded on the host by `defmt-print --log-format {s}`):
 //!
@@ -17,129 +19,30 @@
 //! pulse <n> at=<sample> <class|ambiguous|out[:sides]|rejected> <class or reason> p_ppm=<u32> F_mN=<u32> t_ns=<u32>
 //! stuck at=<sample>
 //! classified <class> <count>
-//! counters samples=.. pulses=.. ambiguous=.. out=.. rejected=.. stuck=.. balanced=<0|1>
+//! rejected <reason> <count>
+//! counters samples=.. pulses=.. ambiguous=.. out=.. rejected=.. stuck=.. gaps=.. lost=.. balanced=<0|1>
 //! backend <default backend>
 //! measure <key> <value>
 //! ```
 //!
 //! Run: `cargo run --release --target thumbv7em-none-eabihf --example node` (runner
-//! `fw/run.sh`). On the host, `cargo run --example node` replays the same stream through the
-//! same kernel and prints the same `pulse`/`stuck`/`classified`/`counters` lines, which
-//! `fw/ci.sh` compares with the emulated node's.
+//! `fw/run.sh`). On the host, `cargo run --example node` has host-sim read the same stream
+//! files and replay them through the same kernel, and prints the same
+//! `pulse`/`stuck`/`classified`/`rejected`/`counters` lines, which `fw/ci.sh` compares with the
+//! emulated node's line by line (plus a `truth` line, host only: the verdicts against the
+//! stream's truth). `examples/front_end.rs` feeds the same stream through the IIS3DWB driver.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
-use coalshock::math::Backend;
-use coalshock::scene::DEFAULT_CLASSES;
-use coalshock::{Counters, ParticleClass, Report, Scene, Side, Verdict};
+mod common;
 
-/// The replayed stream: little-endian i16 samples.
-static STREAM: &[u8] = include_bytes!("data/paper_stream.bin");
-
-/// The stream as ADC samples.
-fn samples() -> impl Iterator<Item = i32> {
-    STREAM
-        .chunks_exact(2)
-        .map(|c| i16::from_le_bytes(<[u8; 2]>::try_from(c).unwrap_or([0, 0])) as i32)
-}
-
-/// The scene the node runs, with math backend `M`.
-#[inline(never)]
-fn build_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
-    Scene::paper_for()
-}
-
-/// One `pulse` line, in integers so host and node print the same text.
-struct PulseLine<'a> {
-    at: u64,
-    kind: &'static str,
-    who: &'a str,
-    posterior_ppm: u32,
-    force_mn: u32,
-    duration_ns: u32,
-}
-
-/// Kind of an out-of-envelope pulse by where the nearest class would need its radius and
-/// speed: `OUT_KINDS[radius][speed]` with below/inside/above as 0/1/2.
-const OUT_KINDS: [[&str; 3]; 3] = [
-    ["out:r_below,u_below", "out:r_below", "out:r_below,u_above"],
-    ["out:u_below", "out", "out:u_above"],
-    ["out:r_above,u_below", "out:r_above", "out:r_above,u_above"],
-];
-
-fn side_index(s: Side) -> usize {
-    match s {
-        Side::Below => 0,
-        Side::Inside => 1,
-        Side::Above => 2,
-    }
-}
-
-impl<'a> PulseLine<'a> {
-    fn new(r: &Report, classes: &'a [ParticleClass]) -> Self {
-        let name = |i: u8| classes.get(i as usize).map_or("?", |c| c.name.as_str());
-        let ppm = |p: f32| (p * 1e6 + 0.5) as u32;
-        let (kind, who, posterior_ppm) = match r.verdict {
-            Verdict::Class { class, posterior } => ("class", name(class), ppm(posterior)),
-            Verdict::Ambiguous { best, posterior } => ("ambiguous", name(best), ppm(posterior)),
-            Verdict::OutOfEnvelope {
-                nearest,
-                radius,
-                speed,
-            } => {
-                let kind = OUT_KINDS
-                    .get(side_index(radius))
-                    .and_then(|row| row.get(side_index(speed)))
-                    .copied()
-                    .unwrap_or("out");
-                (kind, name(nearest), 0)
-            }
-            Verdict::Rejected(reason) => ("rejected", reason.name(), 0),
-        };
-        let (force_mn, duration_ns) = r.measurement.map_or((0, 0), |m| {
-            (
-                (m.peak_force_n * 1e3 + 0.5) as u32,
-                (m.duration_s * 1e9 + 0.5) as u32,
-            )
-        });
-        Self {
-            at: r.at_sample,
-            kind,
-            who,
-            posterior_ppm,
-            force_mn,
-            duration_ns,
-        }
-    }
-}
-
-/// Counter fields of the final `counters` line.
-struct CounterLine {
-    samples: u64,
-    pulses: u32,
-    ambiguous: u32,
-    out: u32,
-    rejected: u32,
-    stuck: u32,
-    balanced: u32,
-}
-
-impl CounterLine {
-    fn new(c: &Counters<DEFAULT_CLASSES>) -> Self {
-        Self {
-            samples: c.samples,
-            pulses: c.pulses,
-            ambiguous: c.ambiguous,
-            out: c.out_of_envelope,
-            rejected: c.rejected.iter().sum(),
-            stuck: c.stuck_runs,
-            balanced: c.balanced() as u32,
-        }
-    }
-}
+use coalshock::RejectReason;
+use common::{CounterLine, PulseLine};
 
 #[cfg(target_os = "none")]
 mod node {
-    use super::{CounterLine, PulseLine, build_scene, samples};
+    use super::common::target::exit;
+    use super::common::{Input, build_scene, inputs};
+    use super::{CounterLine, PulseLine, RejectReason};
     use coalshock::math::{Backend, DefaultBackend, Libm, Micromath};
     use coalshock::scene::DEFAULT_CLASSES;
     use coalshock::{Counters, Detector, Event, Monitor, Scene, Verdict};
@@ -148,25 +51,7 @@ mod node {
     use core::sync::atomic::{AtomicU32, Ordering};
     use cortex_m::peripheral::{SCB, SYST, syst::SystClkSource};
     use cortex_m_rt::{entry, exception};
-    use cortex_m_semihosting::debug;
     use defmt_semihosting as _;
-
-    #[panic_handler]
-    fn panic(_: &core::panic::PanicInfo) -> ! {
-        // No formatting: the release build must not contain any panic path at all (fw/measure.sh
-        // checks), and a panic message would pull in core::fmt.
-        exit(false)
-    }
-
-    fn exit(ok: bool) -> ! {
-        debug::exit(if ok {
-            debug::EXIT_SUCCESS
-        } else {
-            debug::EXIT_FAILURE
-        });
-        #[allow(clippy::empty_loop)]
-        loop {}
-    }
 
     /// SysTick value (counts down, 24 bits).
     #[inline(always)]
@@ -327,6 +212,11 @@ mod node {
     }
 
     #[inline(never)]
+    fn gap<M: Backend>(m: &mut Monitor<DEFAULT_CLASSES, M>, lost: u32) -> Option<Event> {
+        m.gap(lost)
+    }
+
+    #[inline(never)]
     fn finish<M: Backend>(m: &mut Monitor<DEFAULT_CLASSES, M>) -> Option<Event> {
         m.finish()
     }
@@ -404,7 +294,18 @@ mod node {
         let mut current = 0u32;
         let mut verdicts = 0x811C_9DC5u32;
         let base = rt::paint();
-        for s in samples() {
+        for input in inputs() {
+            let s = match input {
+                Input::Sample(s) => s,
+                Input::Gap(lost) => {
+                    // A recorded gap (not timed): a pulse in progress is rejected.
+                    if let Some(Event::Pulse(r)) = gap(&mut monitor, lost) {
+                        verdicts = hash_verdict(verdicts, r.at_sample, &r.verdict);
+                        current = 0;
+                    }
+                    continue;
+                }
+            };
             let was_active = monitor.detector().in_pulse();
             let t0 = now();
             let ev = step(&mut monitor, s);
@@ -525,15 +426,24 @@ mod node {
         for (class, count) in m.scene().classes().iter().zip(c.classified.iter()) {
             defmt::println!("classified {=str} {=u32}", class.name.as_str(), count);
         }
+        for reason in RejectReason::ALL {
+            defmt::println!(
+                "rejected {=str} {=u32}",
+                reason.name(),
+                c.rejected_for(reason)
+            );
+        }
         let l = CounterLine::new(c);
         defmt::println!(
-            "counters samples={=u64} pulses={=u32} ambiguous={=u32} out={=u32} rejected={=u32} stuck={=u32} balanced={=u32}",
+            "counters samples={=u64} pulses={=u32} ambiguous={=u32} out={=u32} rejected={=u32} stuck={=u32} gaps={=u32} lost={=u64} balanced={=u32}",
             l.samples,
             l.pulses,
             l.ambiguous,
             l.out,
             l.rejected,
             l.stuck,
+            l.gaps,
+            l.lost,
             l.balanced
         );
     }
@@ -617,8 +527,12 @@ mod node {
         measured: &Counters<DEFAULT_CLASSES>,
     ) -> bool {
         let mut n = 0u32;
-        for s in samples() {
-            if let Some(e) = monitor.feed(s) {
+        for input in inputs() {
+            let event = match input {
+                Input::Sample(s) => monitor.feed(s),
+                Input::Gap(lost) => monitor.gap(lost),
+            };
+            if let Some(e) = event {
                 log_event(n, &e, monitor.scene());
                 n += 1;
             }
@@ -631,55 +545,124 @@ mod node {
     }
 }
 
+/// The host replay: host-sim reads the same `.bin` + `.truth.csv` pair and replays it through
+/// the same kernel (`host_sim::stream::replay_events`: blocks through `Monitor::feed_slice`,
+/// `Monitor::gap` at every recorded gap, `Monitor::finish`), and the node's lines are printed.
 #[cfg(not(target_os = "none"))]
 fn main() {
+    use coalshock::math::DefaultBackend;
+    use coalshock::{Event, Monitor, ParticleClass, Verdict};
+    use host_sim::stream::{ImpactFault, match_truth, read_stream, replay_events};
+
     eprintln!(
         "examples/node.rs is firmware for a Cortex-M4F node; run it in QEMU with\n  \
          cargo run --release --target thumbv7em-none-eabihf --example node\n\
-         (runner fw/run.sh; fw/ci.sh does the whole check). On the host it replays the same\n\
-         stream through the kernel and prints the lines the node prints:"
+         (runner fw/run.sh; fw/ci.sh does the whole check). On the host, host-sim replays the\n\
+         same stream through the kernel and the lines the node prints are printed:"
     );
-    let scene = match build_scene::<coalshock::math::DefaultBackend>() {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("error scene {e:?}");
-            std::process::exit(1);
-        }
+    let fail = |what: String| -> ! {
+        eprintln!("error {what}");
+        std::process::exit(1)
     };
-    let mut monitor = coalshock::Monitor::new(scene);
-    let mut n = 0u32;
-    let mut print = |e: &coalshock::Event, classes: &[ParticleClass]| {
+    let stem = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/data/paper_stream");
+    let stream = read_stream(&stem).unwrap_or_else(|e| fail(format!("stream {e}")));
+    // The node's copy of the stream (compiled in) must be what host-sim reads.
+    let stored: Vec<i16> = (0..common::STORED_SAMPLES).map(common::sample).collect();
+    if stream.samples != stored {
+        fail("stream: the samples host-sim reads differ from the node's".into());
+    }
+    let gaps: Vec<(usize, u32)> = stream.gaps.iter().map(|g| (g.position, g.lost)).collect();
+    let node_gaps: Vec<(usize, u32)> = common::GAPS.iter().map(|g| (g.position, g.lost)).collect();
+    if gaps != node_gaps {
+        fail(format!(
+            "stream: host-sim reads the gaps {gaps:?}, the node {node_gaps:?}"
+        ));
+    }
+
+    let scene =
+        common::build_scene::<DefaultBackend>().unwrap_or_else(|e| fail(format!("scene {e:?}")));
+    let mut monitor = Monitor::new(scene);
+    let events = replay_events(&stream, &mut monitor);
+    // The node's own replay (one `feed` per sample, `gap` at the recorded gaps) must give the
+    // same events as host-sim's (blocks through `feed_slice`).
+    let mut node = Monitor::new(monitor.scene().clone());
+    let mut node_events: Vec<Event> = common::inputs()
+        .filter_map(|input| match input {
+            common::Input::Sample(s) => node.feed(s),
+            common::Input::Gap(lost) => node.gap(lost),
+        })
+        .collect();
+    node_events.extend(node.finish());
+    if node_events != events || node.counters() != monitor.counters() {
+        fail("replay: one feed per sample and feed_slice blocks give different events".into());
+    }
+    let classes: &[ParticleClass] = monitor.scene().classes();
+    for (n, e) in events.iter().enumerate() {
         match e {
-            coalshock::Event::Pulse(r) => {
+            Event::Pulse(r) => {
                 let l = PulseLine::new(r, classes);
                 println!(
                     "pulse {} at={} {} {} p_ppm={} F_mN={} t_ns={}",
                     n, l.at, l.kind, l.who, l.posterior_ppm, l.force_mn, l.duration_ns
                 );
             }
-            coalshock::Event::Stuck { at_sample } => println!("stuck at={at_sample}"),
-        }
-        n += 1;
-    };
-    for s in samples() {
-        if let Some(e) = monitor.feed(s) {
-            print(&e, monitor.scene().classes());
+            Event::Stuck { at_sample } => println!("stuck at={at_sample}"),
         }
     }
-    if let Some(e) = monitor.finish() {
-        print(&e, monitor.scene().classes());
-    }
-    for (class, count) in monitor
-        .scene()
-        .classes()
-        .iter()
-        .zip(monitor.counters().classified.iter())
-    {
+    let c = monitor.counters();
+    for (class, count) in classes.iter().zip(c.classified.iter()) {
         println!("classified {} {}", class.name.as_str(), count);
     }
-    let l = CounterLine::new(monitor.counters());
+    for reason in RejectReason::ALL {
+        println!("rejected {} {}", reason.name(), c.rejected_for(reason));
+    }
+    let l = CounterLine::new(c);
     println!(
-        "counters samples={} pulses={} ambiguous={} out={} rejected={} stuck={} balanced={}",
-        l.samples, l.pulses, l.ambiguous, l.out, l.rejected, l.stuck, l.balanced
+        "counters samples={} pulses={} ambiguous={} out={} rejected={} stuck={} gaps={} lost={} balanced={}",
+        l.samples, l.pulses, l.ambiguous, l.out, l.rejected, l.stuck, l.gaps, l.lost, l.balanced
+    );
+
+    // Against the truth (not compared with the node): reports paired with impacts by peak time.
+    let reports: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Pulse(r) => Some(*r),
+            Event::Stuck { .. } => None,
+        })
+        .collect();
+    let m = match_truth(&reports, &stream.truth, 3);
+    // Clean impacts by verdict: right class, wrong class, ambiguous, out, rejected.
+    let mut clean = [0u32; 5];
+    for p in &m.pairs {
+        let (Some(r), Some(t)) = (reports.get(p.report), stream.truth.get(p.truth)) else {
+            continue;
+        };
+        if t.fault != ImpactFault::None {
+            continue;
+        }
+        let slot = match r.verdict {
+            Verdict::Class { class, .. } if class as usize == t.class => 0,
+            Verdict::Class { .. } => 1,
+            Verdict::Ambiguous { .. } => 2,
+            Verdict::OutOfEnvelope { .. } => 3,
+            Verdict::Rejected(_) => 4,
+        };
+        clean[slot] += 1;
+    }
+    println!(
+        "truth impacts={} faulty={} reports={} paired={} clean: right={} wrong={} ambiguous={} out={} rejected={}",
+        stream.truth.len(),
+        stream
+            .truth
+            .iter()
+            .filter(|t| t.fault != ImpactFault::None)
+            .count(),
+        reports.len(),
+        m.pairs.len(),
+        clean[0],
+        clean[1],
+        clean[2],
+        clean[3],
+        clean[4]
     );
 }

@@ -1,14 +1,18 @@
 #!/usr/bin/env bash
 # Everything CI does for the firmware, in one script:
 #   1. fw/install.sh (targets, llvm-tools, qemu-system-arm, defmt-print; skips what is present);
-#   2. fw/measure.sh: builds the firmware, runs it in QEMU (Cortex-M4F), measures flash, RAM,
+#   2. fw/stream.sh --check: host-sim regenerates the replayed stream (examples/data/
+#      paper_stream.bin and .truth.csv) and it must equal the shipped files byte for byte;
+#   3. fw/measure.sh: builds the firmware, runs it in QEMU (Cortex-M4F), measures flash, RAM,
 #      stack and instructions, checks for kernel panic paths and enforces fw/budgets.txt;
-#      also builds for Cortex-M0 and M33 and runs the M0 build (report only);
-#   3. host replay: `cargo run --example node` on the host prints the verdict lines the kernel
-#      gives for examples/data/paper_stream.bin (this builds the package's host
-#      dev-dependencies, as `cargo test` does);
-#   4. compares the node's pulse/stuck/classified/counters lines with the host's: they must be
-#      identical (same f32 arithmetic on both).
+#      runs the front-end example (examples/front_end.rs) in QEMU; also builds for Cortex-M0
+#      and M33 and runs the M0 build (report only);
+#   4. host replay: `cargo run --example node` on the host, where host-sim reads the same
+#      stream files and replays them through the kernel, prints the verdict lines (this builds
+#      the package's host dev-dependencies, as `cargo test` does);
+#   5. compares the node's pulse/stuck/classified/rejected/counters lines with the host's:
+#      they must be identical, pulse by pulse (same f32 arithmetic on both);
+#   6. the front-end example on the host: same output as in QEMU.
 # Exit status 0 only when all of it passes. Outputs: <cargo target dir>/fw (or $FW_OUT).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -31,6 +35,9 @@ if [ ! -s "$stream" ] || [ $(( $(stat -c %s "$stream") % 2 )) != 0 ]; then
 fi
 
 status=0
+section "stream: regenerate with host-sim and compare with the shipped one (fw/stream.sh --check)"
+fw/stream.sh --check || status=1
+
 section "firmware: build, run, measure, budgets (fw/measure.sh)"
 fw/measure.sh || status=$?
 
@@ -44,16 +51,37 @@ else
 fi
 
 section "compare node with host"
-lines='^(pulse|stuck|classified|counters) '
-if [ ! -s "$out/node.txt" ] || [ ! -s "$out/host.txt" ]; then
-    echo "nothing to compare (node or host output missing)"
+lines='^(pulse|stuck|classified|rejected|counters) '
+if [ ! -s "$out/node.txt" ] || [ ! -s "$out/host.txt" ] \
+        || ! grep -q '^pulse ' "$out/host.txt"; then
+    echo "nothing to compare (node or host output missing, or no pulse line)"
     status=1
 elif diff -u <(grep -E "$lines" "$out/host.txt") <(grep -E "$lines" "$out/node.txt") \
         > "$out/compare.diff"; then
-    echo "node and host agree on all $(grep -cE "$lines" "$out/host.txt") lines"
+    echo "node and host agree on all $(grep -cE "$lines" "$out/host.txt") lines" \
+        "($(grep -c '^pulse ' "$out/host.txt") pulse verdicts)"
+    grep '^truth ' "$out/host.txt" || true
 else
     echo "node and host DIFFER:"
     head -40 "$out/compare.diff"
+    status=1
+fi
+
+section "front end on the host (cargo run --example front_end)"
+rm -f "$out/front_end-host.txt"
+if cargo run --quiet --example front_end > "$out/front_end-host.txt"; then
+    cat "$out/front_end-host.txt"
+else
+    echo "front-end example FAILED on the host:"
+    cat "$out/front_end-host.txt"
+    status=1
+fi
+if [ -s "$out/front_end.txt" ] && diff -u "$out/front_end-host.txt" "$out/front_end.txt" \
+        > "$out/front_end.diff"; then
+    echo "front end: host and node print the same lines"
+else
+    echo "front end: host and node DIFFER (or the node output is missing):"
+    head -20 "$out/front_end.diff" 2> /dev/null || true
     status=1
 fi
 

@@ -1,0 +1,285 @@
+//! What the example firmwares share (on the node and on the host): the replayed stream, the
+//! gaps recorded in its truth file, the scene and the integer output lines.
+//!
+//! The stream is made by host-sim (`fw/stream.sh`): `data/paper_stream.bin` holds the stored
+//! samples (little-endian i16 ADC codes, dropped samples left out) and
+//! `data/paper_stream.truth.csv` the truth (host-sim/FORMATS.md). Of the truth the node needs
+//! only the `gap` rows (where samples were dropped and how many); they are parsed at compile
+//! time into [`GAPS`], so the CSV text takes no flash.
+
+use coalshock::math::Backend;
+use coalshock::scene::DEFAULT_CLASSES;
+use coalshock::{Counters, ParticleClass, Report, Scene, Side, Verdict};
+
+/// The replayed stream: little-endian i16 samples, dropped samples left out.
+pub static STREAM: &[u8] = include_bytes!("../data/paper_stream.bin");
+
+/// The stream's truth file (only read at compile time, see [`GAPS`]).
+const TRUTH: &[u8] = include_bytes!("../data/paper_stream.truth.csv");
+
+/// Samples stored in [`STREAM`].
+pub const STORED_SAMPLES: usize = STREAM_BYTES / 2;
+const STREAM_BYTES: usize = include_bytes!("../data/paper_stream.bin").len();
+
+/// Dropped samples of the stream: feed `STREAM[..position]`, then `Monitor::gap(lost)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Gap {
+    /// Index of the stored sample before which samples are missing.
+    pub position: usize,
+    /// Samples lost there.
+    pub lost: u32,
+}
+
+/// Number of `gap` rows of the truth file.
+const GAP_COUNT: usize = count_rows(TRUTH, b"gap,");
+
+/// The `gap` rows of the truth file, in order (compile-time parse: a malformed file is a
+/// build error).
+pub const GAPS: [Gap; GAP_COUNT] = gap_rows(TRUTH);
+
+/// Header of the truth file; `position` and `length` are columns 3 and 4 (from 0).
+const TRUTH_HEADER: &[u8] = b"kind,id,sample,position,length,value,";
+
+const fn starts_with(s: &[u8], at: usize, prefix: &[u8]) -> bool {
+    if at + prefix.len() > s.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < prefix.len() {
+        if s[at + i] != prefix[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
+/// Index just past the end of the line starting at `at` (past its `\n`).
+const fn next_line(s: &[u8], mut at: usize) -> usize {
+    while at < s.len() && s[at] != b'\n' {
+        at += 1;
+    }
+    if at < s.len() { at + 1 } else { at }
+}
+
+const fn count_rows(csv: &[u8], kind: &[u8]) -> usize {
+    let mut n = 0;
+    let mut at = 0;
+    while at < csv.len() {
+        if starts_with(csv, at, kind) {
+            n += 1;
+        }
+        at = next_line(csv, at);
+    }
+    n
+}
+
+/// The unsigned decimal in column `col` of the line starting at `at`.
+const fn column_u64(csv: &[u8], at: usize, col: usize) -> u64 {
+    let mut i = at;
+    let mut c = 0;
+    while c < col {
+        while csv[i] != b',' {
+            assert!(csv[i] != b'\n', "truth file: row too short");
+            i += 1;
+        }
+        i += 1;
+        c += 1;
+    }
+    let mut v: u64 = 0;
+    let mut digits = 0;
+    while i < csv.len() && csv[i] >= b'0' && csv[i] <= b'9' {
+        v = v * 10 + (csv[i] - b'0') as u64;
+        i += 1;
+        digits += 1;
+    }
+    assert!(
+        digits > 0 && csv[i] == b',',
+        "truth file: not an unsigned integer"
+    );
+    v
+}
+
+const fn gap_rows<const K: usize>(csv: &[u8]) -> [Gap; K] {
+    assert!(
+        starts_with(csv, 0, TRUTH_HEADER),
+        "truth file: unexpected header"
+    );
+    let mut out = [Gap {
+        position: 0,
+        lost: 0,
+    }; K];
+    let mut k = 0;
+    let mut at = 0;
+    while at < csv.len() {
+        if starts_with(csv, at, b"gap,") {
+            let position = column_u64(csv, at, 3) as usize;
+            let lost = column_u64(csv, at, 4) as u32;
+            assert!(position <= STORED_SAMPLES, "truth file: gap past the end");
+            assert!(
+                k == 0 || position >= out[k - 1].position,
+                "truth file: gaps out of order"
+            );
+            out[k] = Gap { position, lost };
+            k += 1;
+        }
+        at = next_line(csv, at);
+    }
+    out
+}
+
+/// Stored sample `i` of the stream (0 past the end).
+pub fn sample(i: usize) -> i16 {
+    let lo = STREAM.get(2 * i).copied().unwrap_or(0);
+    let hi = STREAM.get(2 * i + 1).copied().unwrap_or(0);
+    i16::from_le_bytes([lo, hi])
+}
+
+/// One step of the replay: a stored sample, or a recorded gap before the next one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Input {
+    /// The next stored sample.
+    Sample(i32),
+    /// Samples dropped here (`Monitor::gap`).
+    Gap(u32),
+}
+
+/// The stream as the node replays it: every stored sample in order, with each recorded gap
+/// at its place.
+pub fn inputs() -> impl Iterator<Item = Input> {
+    let mut position = 0usize;
+    let mut gaps = GAPS.iter().peekable();
+    core::iter::from_fn(move || {
+        if let Some(g) = gaps.next_if(|g| g.position <= position) {
+            return Some(Input::Gap(g.lost));
+        }
+        if position < STORED_SAMPLES {
+            position += 1;
+            return Some(Input::Sample(sample(position - 1) as i32));
+        }
+        None
+    })
+}
+
+/// The scene the node runs, with math backend `M`.
+#[inline(never)]
+pub fn build_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
+    Scene::paper_for()
+}
+
+/// One `pulse` line, in integers so host and node print the same text.
+pub struct PulseLine<'a> {
+    pub at: u64,
+    pub kind: &'static str,
+    pub who: &'a str,
+    pub posterior_ppm: u32,
+    pub force_mn: u32,
+    pub duration_ns: u32,
+}
+
+/// Kind of an out-of-envelope pulse by where the nearest class would need its radius and
+/// speed: `OUT_KINDS[radius][speed]` with below/inside/above as 0/1/2.
+const OUT_KINDS: [[&str; 3]; 3] = [
+    ["out:r_below,u_below", "out:r_below", "out:r_below,u_above"],
+    ["out:u_below", "out", "out:u_above"],
+    ["out:r_above,u_below", "out:r_above", "out:r_above,u_above"],
+];
+
+fn side_index(s: Side) -> usize {
+    match s {
+        Side::Below => 0,
+        Side::Inside => 1,
+        Side::Above => 2,
+    }
+}
+
+impl<'a> PulseLine<'a> {
+    pub fn new(r: &Report, classes: &'a [ParticleClass]) -> Self {
+        let name = |i: u8| classes.get(i as usize).map_or("?", |c| c.name.as_str());
+        let ppm = |p: f32| (p * 1e6 + 0.5) as u32;
+        let (kind, who, posterior_ppm) = match r.verdict {
+            Verdict::Class { class, posterior } => ("class", name(class), ppm(posterior)),
+            Verdict::Ambiguous { best, posterior } => ("ambiguous", name(best), ppm(posterior)),
+            Verdict::OutOfEnvelope {
+                nearest,
+                radius,
+                speed,
+            } => {
+                let kind = OUT_KINDS
+                    .get(side_index(radius))
+                    .and_then(|row| row.get(side_index(speed)))
+                    .copied()
+                    .unwrap_or("out");
+                (kind, name(nearest), 0)
+            }
+            Verdict::Rejected(reason) => ("rejected", reason.name(), 0),
+        };
+        let (force_mn, duration_ns) = r.measurement.map_or((0, 0), |m| {
+            (
+                (m.peak_force_n * 1e3 + 0.5) as u32,
+                (m.duration_s * 1e9 + 0.5) as u32,
+            )
+        });
+        Self {
+            at: r.at_sample,
+            kind,
+            who,
+            posterior_ppm,
+            force_mn,
+            duration_ns,
+        }
+    }
+}
+
+/// Counter fields of the final `counters` line.
+pub struct CounterLine {
+    pub samples: u64,
+    pub pulses: u32,
+    pub ambiguous: u32,
+    pub out: u32,
+    pub rejected: u32,
+    pub stuck: u32,
+    pub gaps: u32,
+    pub lost: u64,
+    pub balanced: u32,
+}
+
+impl CounterLine {
+    pub fn new(c: &Counters<DEFAULT_CLASSES>) -> Self {
+        Self {
+            samples: c.samples,
+            pulses: c.pulses,
+            ambiguous: c.ambiguous,
+            out: c.out_of_envelope,
+            rejected: c.rejected.iter().sum(),
+            stuck: c.stuck_runs,
+            gaps: c.gaps,
+            lost: c.lost_samples,
+            balanced: c.balanced() as u32,
+        }
+    }
+}
+
+/// On the node: the panic handler and the semihosting exit both firmware examples use.
+#[cfg(target_os = "none")]
+pub mod target {
+    use cortex_m_semihosting::debug;
+
+    #[panic_handler]
+    fn panic(_: &core::panic::PanicInfo) -> ! {
+        // No formatting: the release build must not contain any panic path at all (fw/measure.sh
+        // checks), and a panic message would pull in core::fmt.
+        exit(false)
+    }
+
+    /// Ends the QEMU run through semihosting with success or failure.
+    pub fn exit(ok: bool) -> ! {
+        debug::exit(if ok {
+            debug::EXIT_SUCCESS
+        } else {
+            debug::EXIT_FAILURE
+        });
+        #[allow(clippy::empty_loop)]
+        loop {}
+    }
+}
