@@ -207,7 +207,7 @@ impl Default for Settings {
             hold_samples: 2,
             baseline_tau_s: 0.02,
             stuck_samples: 64,
-            model_sigma: 0.03,
+            model_sigma: 0.01,
             confidence: 0.9,
             out_sigmas: 4.0,
             separability_grid: 48,
