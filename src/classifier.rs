@@ -41,6 +41,9 @@ pub enum RejectReason {
     /// `(sum v^2 / C_ENERGY F_max^2) / (sum v / C_AREA F_max)` departs from 1 by more than the
     /// scene's `shape_tolerance` (two impacts within one contact, a distorted pulse).
     Misshapen,
+    /// Shorter than [`crate::detector::MIN_DURATION_SAMPLES`]: too few samples to measure
+    /// peak and duration (the sample rate is too low for this pulse).
+    TooShort,
     /// The baseline lagged a DC drift faster than it can follow: the pre-trigger samples sat
     /// more than half the trigger level off it, so peak and area would be biased.
     Drift,
@@ -48,7 +51,7 @@ pub enum RejectReason {
 
 impl RejectReason {
     /// Every reason, in the order [`crate::counters::Counters`] stores them.
-    pub const ALL: [RejectReason; 9] = [
+    pub const ALL: [RejectReason; 10] = [
         RejectReason::Saturated,
         RejectReason::Spike,
         RejectReason::PileUp,
@@ -57,6 +60,7 @@ impl RejectReason {
         RejectReason::Gap,
         RejectReason::Implausible,
         RejectReason::Misshapen,
+        RejectReason::TooShort,
         RejectReason::Drift,
     ];
 
@@ -76,6 +80,7 @@ impl RejectReason {
             RejectReason::Gap => "gap",
             RejectReason::Implausible => "implausible",
             RejectReason::Misshapen => "misshapen",
+            RejectReason::TooShort => "too_short",
             RejectReason::Drift => "drift",
         }
     }

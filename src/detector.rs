@@ -54,6 +54,11 @@ pub const C_ENERGY: f32 = 0.411_341_7;
 /// `pi` of a sine.
 pub const PEAK_OMEGA: f32 = 3.290_681;
 
+/// Shortest duration, in samples, that is classified: a pulse measured shorter (by more than
+/// three of its sigmas) is rejected as `TooShort`, and a scene whose shortest pulse is shorter
+/// is refused. The fit's duration error is 3.9 % at 3 samples per pulse and grows as `n^-2.5`.
+pub const MIN_DURATION_SAMPLES: f32 = 2.5;
+
 /// Consecutive samples equal to a pulse's largest sample that make a clipped (flat) top, at
 /// least (and `n / 20` for a pulse of `n` samples).
 pub const FLAT_TOP_SAMPLES: u16 = 3;
@@ -599,6 +604,10 @@ impl<M: Backend> Detector<M> {
         let sigma_ln_duration = M::sqrt(
             sigma_area * sigma_area + noise_force * noise_force + fit_duration * fit_duration,
         );
+        // Shorter than the fit can measure, even allowing three sigma for noise.
+        if duration * (1.0 + 3.0 * sigma_ln_duration) < MIN_DURATION_SAMPLES {
+            return reject(RejectReason::TooShort);
+        }
         let energy = p.sum_sq - n * self.noise * self.noise;
         let q = (energy * C_AREA) / (p.sum * peak * C_ENERGY * self.shape_ratio);
         let sigma_energy = 2.0 * self.noise / M::sqrt(energy.max(f32::MIN_POSITIVE));

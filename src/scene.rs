@@ -278,7 +278,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     ///
     /// Refuses, with a typed [`Error`]: invalid materials, ranges or sensor settings; fewer than
     /// two classes or more than `N`; any corner of any envelope whose peak force or duration
-    /// f32 cannot carry; a scene whose shortest pulse is less than one sample long.
+    /// f32 cannot carry; a scene whose shortest pulse is shorter than
+    /// [`crate::detector::MIN_DURATION_SAMPLES`] (2.5 samples): its pulses cannot be measured.
     pub fn new(
         plate: Material,
         classes: &[ParticleClass],
@@ -334,9 +335,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         for lp in ln_priors.iter_mut() {
             *lp -= top;
         }
-        if shortest * sensor.sample_rate_hz < 1.0 {
+        if shortest * sensor.sample_rate_hz < crate::detector::MIN_DURATION_SAMPLES {
             return Err(Error::OutOfRange(
-                "sample_rate_hz (shortest pulse < 1 sample)",
+                "sample_rate_hz (shortest pulse < 2.5 samples)",
             ));
         }
         representable(longest * sensor.sample_rate_hz, "longest pulse in samples")?;

@@ -289,14 +289,14 @@ fn sample_rate_too_low_for_the_shortest_pulse() {
     let scene = build(&base()).unwrap();
     let (shortest, _) = scene.duration_bounds_s();
     // 1 kS/s: the shortest pulse (~0.12 ms) is a tenth of a sample.
-    let low = Error::OutOfRange("sample_rate_hz (shortest pulse < 1 sample)");
+    let low = Error::OutOfRange("sample_rate_hz (shortest pulse < 2.5 samples)");
     expect("1 kS/s", low, |p| p.sensor.sample_rate_hz = 1000.0);
-    // Just below and just above one sample per shortest pulse.
-    expect("0.99 samples per shortest pulse", low, |p| {
-        p.sensor.sample_rate_hz = 0.99 / shortest
+    // Just below and just above 2.5 samples per shortest pulse.
+    expect("2.49 samples per shortest pulse", low, |p| {
+        p.sensor.sample_rate_hz = 2.49 / shortest
     });
-    accepted("1.01 samples per shortest pulse", |p| {
-        p.sensor.sample_rate_hz = 1.01 / shortest
+    accepted("2.51 samples per shortest pulse", |p| {
+        p.sensor.sample_rate_hz = 2.51 / shortest
     });
     // The smallest rate the kernel carries (1e-30 S/s).
     expect("1e-30 S/s", low, |p| p.sensor.sample_rate_hz = 1e-30);

@@ -185,7 +185,7 @@ impl TradeoffConfig {
             dopri5_tolerances: vec![1e-3, 1e-6, 1e-9],
             rk4_steps: vec![10, 50, 200],
             integrator_points: 2,
-            sample_rates_hz: vec![10_000.0, 1_000_000.0],
+            sample_rates_hz: vec![10_000.0, 26_700.0, 1_000_000.0],
         }
     }
 }

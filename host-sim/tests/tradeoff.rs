@@ -87,6 +87,15 @@ fn metrics_csv_has_every_row_and_finite_values() {
     }
     for fs in &cfg.sample_rates_hz {
         for scene in ["paper", "paper_narrow"] {
+            // 10 kS/s leaves the paper's shortest pulses 1.1 samples: the kernel refuses it.
+            let refused = t
+                .refused_rates
+                .iter()
+                .any(|(s, f, _)| s == scene && f == fs);
+            assert_eq!(refused, *fs < 20_000.0, "{scene} at {fs}");
+            if refused {
+                continue;
+            }
             assert!(
                 has(
                     "sample_rate",
@@ -104,7 +113,7 @@ fn metrics_csv_has_every_row_and_finite_values() {
             ));
         }
     }
-    assert!(t.refused_rates.is_empty(), "{:?}", t.refused_rates);
+    assert_eq!(t.refused_rates.len(), 2, "{:?}", t.refused_rates);
 }
 
 /// `(cost, loss, on_front)` of one Pareto point.
@@ -216,7 +225,7 @@ fn faster_sampling_does_not_lose_accuracy_on_the_narrow_scene() {
         .expect("rows");
     assert_eq!(
         (lo.sample_rate_hz, hi.sample_rate_hz),
-        (10_000.0, 1_000_000.0)
+        (26_700.0, 1_000_000.0)
     );
     assert!(
         hi.accuracy.forced_choice >= lo.accuracy.forced_choice,
