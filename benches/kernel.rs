@@ -1,7 +1,11 @@
-//! Host benchmarks of the kernel: ns per quiet sample, per classified pulse, per scene build.
+//! Host benchmarks of the kernel: ns per quiet sample (one `feed` call each, and through
+//! `feed_slice` in blocks of 256), per classified pulse, per scene build. Quiet figures are
+//! for 10 000 samples.
 //! Run with `cargo bench --bench kernel` and `cargo bench --bench kernel --features micromath`.
 
-use coalshock::{Measurement, Monitor, Scene};
+use coalshock::hertz::impact;
+use coalshock::material::effective_modulus_pa;
+use coalshock::{Material, Measurement, Monitor, Scene};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -39,6 +43,22 @@ fn bench(c: &mut Criterion) {
             }
         })
     });
+    c.bench_function(
+        &format!("{backend}/quiet sample, feed_slice blocks of 256"),
+        |b| {
+            let mut m = Monitor::new(scene.clone());
+            for &s in &q {
+                m.feed(s);
+            }
+            b.iter(|| {
+                for chunk in q.chunks(256) {
+                    m.feed_slice(black_box(chunk), |e| {
+                        black_box(e);
+                    });
+                }
+            })
+        },
+    );
     let block = pulse_block();
     let mut warm = Monitor::new(scene.clone());
     for &s in &q {
@@ -52,9 +72,12 @@ fn bench(c: &mut Criterion) {
             }
         })
     });
+    // Coal of R = 25 mm at 3 m/s: inside both envelopes (the overlap), the costly case.
+    let e = effective_modulus_pa(&Material::COAL, &Material::CARBON_STEEL).expect("materials");
+    let hit = impact(e, Material::COAL.density_kg_m3, 0.025, 3.0).expect("impact");
     let meas = Measurement {
-        peak_force_n: 3000.0,
-        duration_s: 250e-6,
+        peak_force_n: hit.peak_force_n,
+        duration_s: hit.duration_s,
         sigma_ln_force: 0.002,
         sigma_ln_duration: 0.005,
     };
