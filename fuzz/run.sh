@@ -13,7 +13,11 @@ secs="${1:-60}"
 shift || true
 cd "$(dirname "$0")"
 
-# cargo-fuzz needs a nightly toolchain; install the cargo subcommand once if it is missing.
+# cargo-fuzz needs a nightly toolchain (installed here if the machine lacks one) and the cargo
+# subcommand (installed once if it is missing).
+if ! rustup toolchain list | grep -q '^nightly'; then
+    rustup toolchain install nightly --profile minimal
+fi
 if ! cargo +nightly fuzz --version >/dev/null 2>&1; then
     cargo install cargo-fuzz --locked
 fi
