@@ -19,7 +19,8 @@
 //!   (`q` is divided by the scene's `ContactCalibration::shape_ratio` first).
 //! - Spike on a pulse: the most negative second difference `v[i-1] - 2 v[i] + v[i+1]` of a
 //!   Hertz pulse is about `-1.65 pi^2 F_max / n^2` at its peak (`n` samples per pulse); one
-//!   below `-(2 * that + 0.3 F_max + 8 noise)` is a sample that jumped alone: `Spike`. A run of
+//!   below `-(2 * that + spike_fraction F_max + 8 noise)` (`Settings::spike_fraction`, 0.3)
+//!   is a sample that jumped alone: `Spike`. A run of
 //!   `max(3, n / 20)` or more consecutive samples equal to the pulse's largest one, on a
 //!   sensor with at least one count of noise, is a clipped top: `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
@@ -161,6 +162,7 @@ pub struct Detector<M: Backend = DefaultBackend> {
     noise: f32,
     shape_tolerance: f32,
     shape_ratio: f32,
+    spike_fraction: f32,
     hold: u16,
     max_samples: u32,
     alpha: f32,
@@ -205,6 +207,7 @@ impl<M: Backend> Detector<M> {
             noise,
             shape_tolerance: s.shape_tolerance,
             shape_ratio: s.contact.shape_ratio,
+            spike_fraction: s.spike_fraction,
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -589,7 +592,7 @@ impl<M: Backend> Detector<M> {
         // The sharpest bend a Hertz pulse of this peak and duration has (see the module docs).
         let bend =
             1.65 * core::f32::consts::PI * core::f32::consts::PI * peak / (duration * duration);
-        if p.min_curvature < -(2.0 * bend + 0.3 * peak + 8.0 * self.noise) {
+        if p.min_curvature < -(2.0 * bend + self.spike_fraction * peak + 8.0 * self.noise) {
             return reject(RejectReason::Spike);
         }
         let n = p.samples as f32;

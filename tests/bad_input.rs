@@ -389,6 +389,13 @@ fn settings_fields() {
             |p| p.settings.contact.shape_ratio = v,
         );
     }
+    for v in [NAN, INF, 0.0, -0.3] {
+        expect(
+            &format!("spike_fraction = {v}"),
+            Error::OutOfRange("spike_fraction"),
+            |p| p.settings.spike_fraction = v,
+        );
+    }
     accepted("contact ratios 0.5, 0.7, 0.9", |p| {
         p.settings.contact.force_ratio = 0.5;
         p.settings.contact.duration_ratio = 0.7;

@@ -1070,6 +1070,7 @@ fn settings_field() -> impl Strategy<Value = Settings> {
                 separability_grid: grid,
                 shape_tolerance: shape,
                 contact: coalshock::ContactCalibration::HERTZ,
+                spike_fraction: 0.3,
             },
         )
 }

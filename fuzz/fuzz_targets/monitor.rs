@@ -159,6 +159,7 @@ impl Bytes<'_> {
                 duration_ratio: self.f32_in(0.5, 2.0),
                 shape_ratio: self.f32_in(0.5, 2.0),
             },
+            spike_fraction: self.f32_in(0.05, 3.0),
             // Mostly small grids: a 256-cell grid with four classes takes long to build.
             separability_grid: match self.u8() {
                 0..=239 => 2 + (self.u8() % 40) as u16,

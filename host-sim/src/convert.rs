@@ -104,6 +104,7 @@ pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
     set(&mut s.confidence, o.confidence);
     set(&mut s.out_sigmas, o.out_sigmas);
     set(&mut s.shape_tolerance, o.shape_tolerance);
+    set(&mut s.spike_fraction, o.spike_fraction);
     let ratio = |v: Option<f64>| v.unwrap_or(1.0) as f32;
     s.contact = ContactCalibration {
         force_ratio: ratio(o.force_ratio),
@@ -151,7 +152,8 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
 /// law the calibration of [`crate::calibrate::calibrate`] (each ratio unless the file gives
 /// it). A law whose ratios vary between impacts widens the tolerances to cover them:
 /// `shape_tolerance >= 1.5 x` the spread of `ln q`, `model_sigma >= ` the larger spread of
-/// `ln F` and `ln t` (unless the file sets them).
+/// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend (unless the file
+/// sets them).
 pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> {
     let mut s = settings_to_kernel(&scene.settings);
     let o = &scene.settings;
@@ -169,6 +171,9 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
         if o.model_sigma.is_none() {
             let spread = c.spread_ln.force.max(c.spread_ln.duration) as f32;
             s.model_sigma = s.model_sigma.max(spread);
+        }
+        if o.spike_fraction.is_none() {
+            s.spike_fraction = s.spike_fraction.max((1.25 * c.sharpest_bend) as f32);
         }
     }
     Ok(s)

@@ -771,6 +771,10 @@ pub struct SettingsOverrides {
     /// The contact's pulse shape ratio `q` (default as `force_ratio`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape_ratio: Option<f64>,
+    /// The spike check's allowance in units of the peak force (default 0.3, raised for a
+    /// damped law whose sampled pulse bends more sharply; see `calibrate`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spike_fraction: Option<f64>,
 }
 
 impl SettingsOverrides {

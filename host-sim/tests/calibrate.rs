@@ -6,7 +6,8 @@
 //!   material, radius or speed (physics notes: the normalised equation depends on `e` only);
 //! - momentum: the area of a damped pulse is the impulse `(1 + e) m u` against the Hertz
 //!   `2 m u`, so `duration_ratio * force_ratio = (1 + e) / 2` with the rebound's own `e`;
-//! - the damped paper scene, calibrated, is classified as well as the undamped one.
+//! - the damped paper scenes (Flores, and the paper's Adams law whose force steps at both ends
+//!   of the contact), calibrated, are classified as well as the undamped one.
 
 use coalshock::math::DefaultBackend;
 use host_sim::calibrate::{C_AREA, C_ENERGY, calibrate, pulse_ratios};
@@ -17,9 +18,15 @@ use host_sim::impact::{ImpactSpec, simulate};
 use host_sim::laws::LawSpec;
 use host_sim::scene::{self, SceneFile};
 
+fn shipped(name: &str) -> SceneFile {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenes")
+        .join(format!("{name}.toml"));
+    scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 fn damped_scene() -> SceneFile {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/paper_damped.toml");
-    scene::load(path).expect("scenes/paper_damped.toml")
+    shipped("paper_damped")
 }
 
 #[test]
@@ -117,6 +124,38 @@ fn damped_scene_is_classified_once_calibrated() {
     let e = evaluate::<DefaultBackend>(&damped_scene(), &opts).unwrap();
     // Uncalibrated, 99 % of these pulses were rejected as misshapen and the rest read 25 %
     // short; calibrated, the scene is as good as the undamped paper scene (Bayes ~76 %).
+    assert!(
+        e.forced_choice_accuracy > 0.70,
+        "forced choice {}",
+        e.forced_choice_accuracy
+    );
+    assert!(e.confident_error_rate < 0.02, "{}", e.confident_error_rate);
+}
+
+#[test]
+fn adams_pulses_bend_sharply_and_the_spike_check_allows_for_it() {
+    let adams = shipped("paper_adams");
+    let c = calibrate(&adams).unwrap().expect("a damped law");
+    // The damping steps in within d = 0.01 mm: at 100 kS/s a sample sees the jump.
+    assert!(c.sharpest_bend > 0.4, "{}", c.sharpest_bend);
+    let s = calibrated_settings(&adams).unwrap();
+    assert!(s.spike_fraction as f64 >= 1.25 * c.sharpest_bend - 1e-6);
+    // Flores ramps its damping with the penetration: its pulse bends less sharply.
+    let flores = calibrate(&damped_scene()).unwrap().expect("a damped law");
+    assert!(
+        flores.sharpest_bend < 0.7 * c.sharpest_bend,
+        "{} against {}",
+        flores.sharpest_bend,
+        c.sharpest_bend
+    );
+    let opts = EvalOptions {
+        n_per_class: 150,
+        seed: 5,
+        bayes_draws_per_class: 1500,
+        ..EvalOptions::default()
+    };
+    let e = evaluate::<DefaultBackend>(&adams, &opts).unwrap();
+    assert!(e.rejected_share < 0.02, "rejected {}", e.rejected_share);
     assert!(
         e.forced_choice_accuracy > 0.70,
         "forced choice {}",

@@ -225,6 +225,7 @@ fn every_shipped_scene_evaluates() {
         "mems_26k",
         "noisy",
         "paper_damped",
+        "paper_adams",
     ] {
         assert!(names.iter().any(|n| n == expected), "{expected}: {names:?}");
     }
