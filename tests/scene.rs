@@ -75,7 +75,7 @@ fn paper_scene_bayes_error_matches_monte_carlo() {
         "paper: kernel bayes {:.4} overlap {:.4}; monte carlo {:.4}",
         s.bayes_error, s.overlap_share, mc
     );
-    assert!((s.bayes_error as f64 - mc).abs() < 0.01);
+    assert!((s.bayes_error as f64 - mc).abs() < 3e-3);
     // physics notes: about 24 % of impacts are ambiguous even without noise.
     assert!((0.22..0.26).contains(&mc), "{mc}");
 }

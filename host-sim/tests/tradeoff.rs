@@ -254,8 +254,14 @@ fn separability_grid_error_against_the_f64_reference() {
     assert!(r.bayes_error > 0.2 && r.bayes_error < 0.27, "{r:?}");
     let coarse = t.grids.iter().find(|g| g.grid == 8).expect("grid 8");
     let default = t.grids.iter().find(|g| g.grid == 48).expect("grid 48");
-    assert!(default.bayes_error_err < coarse.bayes_error_err);
-    assert!(default.bayes_error_err < 5e-3, "{default:?}");
+    // The kernel's row-exact quadrature converges from the coarsest grid on: 8 and 48 rows
+    // agree with each other and with the f64 reference (itself a 768-cell grid here).
+    println!("grid 8: {coarse:?}\ngrid 48: {default:?}\nreference: {r:?}");
+    assert!(
+        (default.bayes_error - coarse.bayes_error).abs() < 2e-4,
+        "{coarse:?} {default:?}"
+    );
+    assert!(default.bayes_error_err < 2e-3, "{default:?}");
     // The kernel types do not depend on the grid: one size for all.
     assert!(t.sizes.monitor >= t.sizes.scene + t.sizes.detector);
 }
