@@ -146,8 +146,8 @@ fn streaming_detector_over_rates() {
         (26_700.0, 0.010, 0.030),
         (50_000.0, 0.008, 0.012),
         (100_000.0, 0.008, 0.010),
-        (250_000.0, 0.008, 0.008),
-        (1_000_000.0, 0.008, 0.008),
+        (250_000.0, 0.006, 0.006),
+        (1_000_000.0, 0.003, 0.003),
     ];
     for (rate, peak_bound, dur_bound) in cases {
         let (ep, ed, found) = stream_errors(rate, tc, 2000.0, 4.0, 40);
@@ -171,6 +171,11 @@ fn clean_pulses_of_any_amplitude_are_never_rejected() {
             let (ep, ed, found) = stream_errors(rate, 150e-6, amp, 4.0, 40);
             println!("{rate:8} S/s, {amp:6} counts: peak {ep:.2e} duration {ed:.2e}");
             assert_eq!(found, 40, "rate {rate} amp {amp}");
+            if rate >= 1e6 && amp >= 200.0 {
+                // 150 samples per pulse: the top is a mean of 13 samples, not the largest
+                // noisy one (which read 6 % high at 200 counts).
+                assert!(ep < 0.02 && ed < 0.02, "rate {rate} amp {amp}: {ep} {ed}");
+            }
         }
     }
 }
