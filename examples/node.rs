@@ -434,18 +434,7 @@ mod node {
             );
         }
         let l = CounterLine::new(c);
-        defmt::println!(
-            "counters samples={=u64} pulses={=u32} ambiguous={=u32} out={=u32} rejected={=u32} stuck={=u32} gaps={=u32} lost={=u64} balanced={=u32}",
-            l.samples,
-            l.pulses,
-            l.ambiguous,
-            l.out,
-            l.rejected,
-            l.stuck,
-            l.gaps,
-            l.lost,
-            l.balanced
-        );
+        l.log();
     }
 
     fn refused() -> ! {

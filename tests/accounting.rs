@@ -31,25 +31,7 @@
 mod common;
 
 use coalshock::{Event, Monitor, RejectReason, Report, Scene, Speed, Verdict};
-use common::{Rng, hertz64};
-
-/// A pulse in slot-local sample units.
-#[derive(Debug, Clone, Copy)]
-struct Pulse {
-    start: f64,
-    len: f64,
-    amp: f64,
-    class: u8,
-}
-
-impl Pulse {
-    fn at(&self, i: usize) -> f64 {
-        self.amp * common::hertz_shape((i as f64 - self.start) / self.len)
-    }
-    fn end(&self) -> usize {
-        (self.start + self.len).ceil() as usize + 1
-    }
-}
+use common::{Pulse, Rng, hertz64};
 
 /// What was injected in a slot.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -184,8 +166,8 @@ impl Generator {
             (Kind::Truncated, [Some(p), _]) => {
                 (p.start + (0.2 + 0.6 * self.rng.uniform()) * p.len) as usize
             }
-            (_, [_, Some(b)]) => b.end(),
-            (_, [Some(a), None]) => a.end(),
+            (_, [_, Some(b)]) => b.end() + 1,
+            (_, [Some(a), None]) => a.end() + 1,
             _ => lead + 1,
         };
         let len = match kind {

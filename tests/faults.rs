@@ -15,29 +15,10 @@
 mod common;
 
 use coalshock::{Counters, Event, Monitor, RejectReason, Report, Scene, Verdict};
-use common::{Rng, hertz64};
+use common::{Pulse, Rng, hertz64};
 
 // ---------------------------------------------------------------------------------------------
 // Stream generation.
-
-/// One impact in sample units: starts at sample `start` (fractional), lasts `len` samples,
-/// peaks at `amp` counts.
-#[derive(Debug, Clone, Copy)]
-struct Pulse {
-    start: f64,
-    len: f64,
-    amp: f64,
-    class: u8,
-}
-
-impl Pulse {
-    fn at(&self, i: usize) -> f64 {
-        self.amp * common::hertz_shape((i as f64 - self.start) / self.len)
-    }
-    fn end(&self) -> usize {
-        (self.start + self.len).ceil() as usize
-    }
-}
 
 /// The scene the streams are made for.
 fn scene() -> Scene {

@@ -245,6 +245,23 @@ pub struct CounterLine {
 }
 
 impl CounterLine {
+    /// Logs the line through defmt (the node's `counters` line, compared with the host's).
+    #[cfg(target_os = "none")]
+    pub fn log(&self) {
+        defmt::println!(
+            "counters samples={=u64} pulses={=u32} ambiguous={=u32} out={=u32} rejected={=u32} stuck={=u32} gaps={=u32} lost={=u64} balanced={=u32}",
+            self.samples,
+            self.pulses,
+            self.ambiguous,
+            self.out,
+            self.rejected,
+            self.stuck,
+            self.gaps,
+            self.lost,
+            self.balanced
+        );
+    }
+
     pub fn new(c: &Counters<DEFAULT_CLASSES>) -> Self {
         Self {
             samples: c.samples,

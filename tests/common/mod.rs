@@ -131,3 +131,24 @@ pub fn hertz_shape(x: f64) -> f64 {
     };
     y.max(0.0).powf(1.5)
 }
+
+/// One impact in sample units: starts at sample `start` (fractional), lasts `len` samples,
+/// peaks at `amp` counts, of class `class`.
+#[derive(Debug, Clone, Copy)]
+pub struct Pulse {
+    pub start: f64,
+    pub len: f64,
+    pub amp: f64,
+    pub class: u8,
+}
+
+impl Pulse {
+    /// The pulse's value at sample `i`.
+    pub fn at(&self, i: usize) -> f64 {
+        self.amp * hertz_shape((i as f64 - self.start) / self.len)
+    }
+    /// The first sample after the pulse.
+    pub fn end(&self) -> usize {
+        (self.start + self.len).ceil() as usize
+    }
+}
