@@ -5,11 +5,11 @@
 //!
 //! - a `HardFault` handler that ends the emulator with a failure status instead of spinning
 //!   (the default handler loops forever, which hangs QEMU);
-//! - repainting the free stack with [`PAINT`] below the current stack pointer;
+//! - repainting the free stack with `PAINT` below the current stack pointer;
 //! - scanning the painted stack for the lowest word that was overwritten (high-water mark).
 //!
 //! With cortex-m-rt's `paint-stack` feature (enabled here) the whole stack region is painted
-//! at reset, so [`lowest_touched`] right before exit gives the peak use of the whole program.
+//! at reset, so `lowest_touched` right before exit gives the peak use of the whole program.
 //!
 //! On the host this crate is empty.
 #![no_std]
