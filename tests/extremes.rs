@@ -1119,7 +1119,9 @@ fn scene_new_never_panics_and_separability_is_a_share() {
                 short.is_finite() && long.is_finite() && short > 0.0 && short <= long,
                 "durations {short} {long}"
             );
-            prop_assert!(short * scene.sensor().sample_rate_hz >= 1.0);
+            prop_assert!(
+                short * scene.sensor().sample_rate_hz >= coalshock::detector::MIN_DURATION_SAMPLES
+            );
             for env in scene.envelopes() {
                 prop_assert!(env.ln_force_coeff.is_finite() && env.ln_duration_coeff.is_finite());
                 prop_assert!(
