@@ -396,6 +396,20 @@ fn settings_fields() {
             |p| p.settings.spike_fraction = v,
         );
     }
+    for v in [NAN, INF, 0.0, -0.05] {
+        expect(
+            &format!("skew_tolerance = {v}"),
+            Error::OutOfRange("skew_tolerance"),
+            |p| p.settings.skew_tolerance = v,
+        );
+    }
+    for v in [NAN, INF, -INF, 10.5, -11.0] {
+        expect(
+            &format!("skewness = {v}"),
+            Error::OutOfRange("contact.skewness"),
+            |p| p.settings.contact.skewness = v,
+        );
+    }
     accepted("contact ratios 0.5, 0.7, 0.9", |p| {
         p.settings.contact.force_ratio = 0.5;
         p.settings.contact.duration_ratio = 0.7;

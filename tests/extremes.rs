@@ -1071,6 +1071,7 @@ fn settings_field() -> impl Strategy<Value = Settings> {
                 shape_tolerance: shape,
                 contact: coalshock::ContactCalibration::HERTZ,
                 spike_fraction: 0.3,
+                skew_tolerance: 0.05,
             },
         )
 }

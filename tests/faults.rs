@@ -722,9 +722,10 @@ fn pile_up_with_a_valley_is_rejected_as_pile_up() {
 fn pile_up_within_one_contact_duration_is_not_classified() {
     // Two impacts 0.3 to 1.0 contact durations apart, peaks 0.5 to 2 times each other. From
     // 0.65 t_c on, the sum is rejected (PileUp from its valley, or Misshapen from its energy
-    // ratio): never a class. Closer, some sums stay within the shape tolerance of one larger
-    // Hertz pulse (the energy ratio cannot see them): at most 15 of the 56 such cases here
-    // may get a class (9 do at the default tolerance 0.02; docs/robustness.md).
+    // ratio or its skewness): never a class. Closer, a few sums stay within the tolerances of
+    // one larger Hertz pulse (equal peaks are symmetric; a small second peak early on hardly
+    // skews the sum): at most 6 of the 56 such cases here may get a class (3 do;
+    // docs/robustness.md).
     let mut rng = Rng::new(18);
     let (mut far, mut near, mut near_cases) = (Vec::new(), Vec::new(), 0);
     for k in 0..120 {
@@ -749,7 +750,7 @@ fn pile_up_within_one_contact_duration_is_not_classified() {
     );
     assert_eq!(near_cases, 56);
     assert!(
-        near.len() <= 15,
+        near.len() <= 6,
         "{} of 56 close pile-ups classified, (offset in t_c, peak ratio): {near:?}",
         near.len()
     );

@@ -158,7 +158,9 @@ impl Bytes<'_> {
                 force_ratio: self.f32_in(0.5, 2.0),
                 duration_ratio: self.f32_in(0.5, 2.0),
                 shape_ratio: self.f32_in(0.5, 2.0),
+                skewness: self.f32_in(0.01, 1.0),
             },
+            skew_tolerance: self.f32_in(0.01, 1.0),
             spike_fraction: self.f32_in(0.05, 3.0),
             // Mostly small grids: a 256-cell grid with four classes takes long to build.
             separability_grid: match self.u8() {

@@ -50,11 +50,82 @@ pub struct Calibration64 {
     pub spread_ln: PulseRatios,
     /// Impacts integrated.
     pub impacts: usize,
+    /// Largest deviation of the shape ratio's log when the impacts' pulses are sampled at the
+    /// scene's rate ([`sampled_shape_spread`]).
+    pub sampled_shape_spread: f64,
+    /// Mean skewness of the impacts' whole pulses (above 0.5 % of the peak; 0 for Hertz).
+    pub skewness: f64,
+    /// Largest distance of one impact's skewness from the mean.
+    pub skewness_spread: f64,
     /// The most negative second difference `v[i-1] - 2 v[i] + v[i+1]` of any impact's pulse
     /// sampled at the scene's rate (16 sample phases), over its peak, negated: how sharply the
     /// contact's own pulse bends (0.02-0.2 for Hertz, about 0.56 for Adams with `d = 1e-5 m`
     /// at 100 kS/s).
     pub sharpest_bend: f64,
+}
+
+/// Skewness `E[(t - mu)^3] / E[(t - mu)^2]^(3/2)` of the force series `series`
+/// (`(t_s, force_n)`, uniformly spaced) weighted by the force, over the points above
+/// `cut` times the peak (as the detector takes the part above its trigger level).
+pub fn skewness(series: &[(f64, f64)], cut: f64) -> f64 {
+    let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
+    let above = || series.iter().filter(|p| p.1 > cut * peak);
+    let m0: f64 = above().map(|p| p.1).sum();
+    if m0 <= 0.0 {
+        return 0.0;
+    }
+    let mu = above().map(|p| p.0 * p.1).sum::<f64>() / m0;
+    let var = above().map(|p| (p.0 - mu).powi(2) * p.1).sum::<f64>() / m0;
+    let third = above().map(|p| (p.0 - mu).powi(3) * p.1).sum::<f64>() / m0;
+    if var > 0.0 {
+        third / var.powf(1.5)
+    } else {
+        0.0
+    }
+}
+
+/// The largest `|ln q_sampled - ln q|` of the force series `series` (`(t_s, force_n)`) sampled
+/// every `1 / sample_rate_hz` at 16 phases: `q_sampled = (sum v^2 / (C_ENERGY F^2)) /
+/// (sum v / (C_AREA F))` with the series' own peak `F`, against the same from the fine series.
+/// A skewed pulse of a few samples sums unevenly; the detector's shape check must allow it.
+pub fn sampled_shape_spread(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
+    let (Some(first), Some(last)) = (series.first(), series.last()) else {
+        return 0.0;
+    };
+    let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
+    if peak <= 0.0 || sample_rate_hz.is_nan() || sample_rate_hz <= 0.0 {
+        return 0.0;
+    }
+    let ln_q = |sum: f64, sum_sq: f64| (sum_sq * C_AREA / (sum * peak * C_ENERGY)).ln();
+    let fine_sum: f64 = series.iter().map(|p| p.1.max(0.0)).sum();
+    let fine_sq: f64 = series.iter().map(|p| p.1.max(0.0).powi(2)).sum();
+    let reference = ln_q(fine_sum, fine_sq);
+    let dt = 1.0 / sample_rate_hz;
+    let at = |t: f64| -> f64 {
+        if t <= first.0 || t >= last.0 {
+            return 0.0;
+        }
+        let i = series
+            .partition_point(|p| p.0 <= t)
+            .clamp(1, series.len() - 1);
+        let (a, b) = (series[i - 1], series[i]);
+        (a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)).max(0.0)
+    };
+    let mut worst = 0.0f64;
+    for k in 0..16 {
+        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        let mut t = first.0 + dt * k as f64 / 16.0;
+        while t < last.0 {
+            let v = at(t);
+            sum += v;
+            sum_sq += v * v;
+            t += dt;
+        }
+        if sum > 0.0 {
+            worst = worst.max((ln_q(sum, sum_sq) - reference).abs());
+        }
+    }
+    worst
 }
 
 /// The most negative second difference of the force series `series` (`(t_s, force_n)`)
@@ -135,7 +206,9 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     }
     let plate = scene.plate.material();
     let mut all = Vec::new();
+    let mut skews = Vec::new();
     let mut bend = 0.0f64;
+    let mut sampled = 0.0f64;
     for class in &scene.classes {
         let (r, u) = (class.radius_m, class.speed_range_m_s());
         for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
@@ -144,6 +217,8 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
                 spec.law = scene.contact.law_spec();
                 let (ratios, series) = pulse_ratios_and_series(&spec)?;
                 bend = bend.max(sharpest_bend(&series, scene.sensor.sample_rate_hz));
+                skews.push(skewness(&series, 0.005));
+                sampled = sampled.max(sampled_shape_spread(&series, scene.sensor.sample_rate_hz));
                 all.push(ratios);
             }
         }
@@ -168,6 +243,12 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
             shape: spread(|p| p.shape, ls),
         },
         impacts: all.len(),
+        skewness: skews.iter().sum::<f64>() / n,
+        skewness_spread: {
+            let m = skews.iter().sum::<f64>() / n;
+            skews.iter().map(|s| (s - m).abs()).fold(0.0, f64::max)
+        },
         sharpest_bend: bend,
+        sampled_shape_spread: sampled,
     }))
 }

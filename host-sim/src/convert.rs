@@ -110,7 +110,9 @@ pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
         force_ratio: ratio(o.force_ratio),
         duration_ratio: ratio(o.duration_ratio),
         shape_ratio: ratio(o.shape_ratio),
+        skewness: o.skewness.unwrap_or(0.0) as f32,
     };
+    set(&mut s.skew_tolerance, o.skew_tolerance);
     if let Some(v) = o.hold_samples {
         s.hold_samples = v;
     }
@@ -151,9 +153,10 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
 /// The kernel settings of a scene file: [`settings_to_kernel`], and for a damped contact
 /// law the calibration of [`crate::calibrate::calibrate`] (each ratio unless the file gives
 /// it). A law whose ratios vary between impacts widens the tolerances to cover them:
-/// `shape_tolerance >= 1.5 x` the spread of `ln q`, `model_sigma >= ` the larger spread of
-/// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend (unless the file
-/// sets them).
+/// `shape_tolerance >= 1.5 x` the spread of `ln q` (between impacts, plus that of sampling at
+/// the scene's rate), `model_sigma >= ` the larger spread of
+/// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend,
+/// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them).
 pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> {
     let mut s = settings_to_kernel(&scene.settings);
     let o = &scene.settings;
@@ -163,14 +166,19 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
         force_ratio: pick(o.force_ratio, cal.map(|c| c.ratios.force)),
         duration_ratio: pick(o.duration_ratio, cal.map(|c| c.ratios.duration)),
         shape_ratio: pick(o.shape_ratio, cal.map(|c| c.ratios.shape)),
+        skewness: o.skewness.or(cal.map(|c| c.skewness)).unwrap_or(0.0) as f32,
     };
     if let Some(c) = cal {
         if o.shape_tolerance.is_none() {
-            s.shape_tolerance = s.shape_tolerance.max((1.5 * c.spread_ln.shape) as f32);
+            let spread = c.spread_ln.shape + c.sampled_shape_spread;
+            s.shape_tolerance = s.shape_tolerance.max((1.5 * spread) as f32);
         }
         if o.model_sigma.is_none() {
             let spread = c.spread_ln.force.max(c.spread_ln.duration) as f32;
             s.model_sigma = s.model_sigma.max(spread);
+        }
+        if o.skew_tolerance.is_none() {
+            s.skew_tolerance = s.skew_tolerance.max((1.5 * c.skewness_spread) as f32);
         }
         if o.spike_fraction.is_none() {
             s.spike_fraction = s.spike_fraction.max((1.25 * c.sharpest_bend) as f32);

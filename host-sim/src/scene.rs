@@ -775,6 +775,14 @@ pub struct SettingsOverrides {
     /// damped law whose sampled pulse bends more sharply; see `calibrate`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spike_fraction: Option<f64>,
+    /// The contact's pulse skewness (default: from the integrator for a damped law, 0 for
+    /// Hertz).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skewness: Option<f64>,
+    /// Allowed distance of a pulse's skewness from the contact's (default 0.05, widened to
+    /// the calibration's spread).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skew_tolerance: Option<f64>,
 }
 
 impl SettingsOverrides {

@@ -10,7 +10,7 @@
 //!   of the contact), calibrated, are classified as well as the undamped one.
 
 use coalshock::math::DefaultBackend;
-use host_sim::calibrate::{C_AREA, C_ENERGY, calibrate, pulse_ratios};
+use host_sim::calibrate::{C_AREA, C_ENERGY, calibrate, pulse_ratios, skewness};
 use host_sim::convert::calibrated_settings;
 use host_sim::evaluate::{EvalOptions, evaluate};
 use host_sim::hertz64::Material64;
@@ -45,6 +45,14 @@ fn hertz_pulse_constants_match_the_integrator() {
             assert!((v - 1.0).abs() < 2e-6, "{what} {v}");
         }
     }
+    // The undamped pulse is symmetric.
+    let mut spec = ImpactSpec::new(Material64::COAL, Material64::CARBON_STEEL, 0.02, 2.0);
+    spec.record = Some(spec.hertz().unwrap().duration_s / 2000.0);
+    let series = host_sim::impact::simulate(&spec)
+        .unwrap()
+        .force_series
+        .unwrap();
+    assert!(skewness(&series, 0.005).abs() < 1e-3);
     // The constants themselves, against values printed to more digits elsewhere:
     // 1.6 / 2.9432751843247 and 2 B(1.6, 0.5) / (2.5 * 2.9432751843247).
     assert!((C_AREA - 0.543_612_098_699_190_7).abs() < 1e-12);
@@ -108,6 +116,9 @@ fn the_impulse_fixes_the_product_of_the_ratios() {
     let c = calibrate(&damped_scene()).unwrap().expect("a damped law");
     assert!(c.spread_ln.force < 1e-5 && c.spread_ln.duration < 1e-5);
     assert_eq!(c.impacts, 18);
+    // Flores rises fast and decays slowly: strongly skewed, the same for every impact.
+    assert!(c.skewness > 0.75 && c.skewness < 0.9, "{}", c.skewness);
+    assert!(c.skewness_spread < 1e-3, "{}", c.skewness_spread);
     assert!(calibrate(&SceneFile::paper()).unwrap().is_none());
     let s = calibrated_settings(&damped_scene()).unwrap();
     assert!((s.contact.force_ratio as f64 / c.ratios.force - 1.0).abs() < 1e-6);
@@ -138,6 +149,9 @@ fn adams_pulses_bend_sharply_and_the_spike_check_allows_for_it() {
     let c = calibrate(&adams).unwrap().expect("a damped law");
     // The damping steps in within d = 0.01 mm: at 100 kS/s a sample sees the jump.
     assert!(c.sharpest_bend > 0.4, "{}", c.sharpest_bend);
+    // Adams' pulse is mildly skewed, by an amount that varies with size and speed.
+    assert!(c.skewness > 0.1 && c.skewness < 0.3, "{}", c.skewness);
+    assert!(c.skewness_spread > 1e-3, "{}", c.skewness_spread);
     let s = calibrated_settings(&adams).unwrap();
     assert!(s.spike_fraction as f64 >= 1.25 * c.sharpest_bend - 1e-6);
     // Flores ramps its damping with the penetration: its pulse bends less sharply.
