@@ -739,7 +739,11 @@ impl<M: Backend> Detector<M> {
 /// filter) below 24 samples.
 fn smooth_width(shortest_samples: f32) -> usize {
     let w = (shortest_samples / 8.0) as usize;
-    let odd = if w % 2 == 0 { w.saturating_sub(1) } else { w };
+    let odd = if w.is_multiple_of(2) {
+        w.saturating_sub(1)
+    } else {
+        w
+    };
     odd.clamp(1, SMOOTH_MAX - 1)
 }
 

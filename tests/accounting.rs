@@ -325,7 +325,7 @@ fn every_injected_event_is_accounted_for() {
         let cuts = slot.gaps.iter().map(|&(at, lost)| (at, Some(lost)));
         for (to, lost) in cuts.chain([(slot.samples.len(), None)]) {
             let chunk = &slot.samples[from..to];
-            if slot_index % 2 == 0 {
+            if slot_index.is_multiple_of(2) {
                 for &s in chunk {
                     if let Some(Event::Pulse(r)) = m.feed(s) {
                         pending.push(r);

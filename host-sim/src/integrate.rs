@@ -635,11 +635,11 @@ fn find_event(
         (kink, Event::Kink),
         (switch, Event::Clamp),
     ] {
-        if let Some(th) = th {
-            if th < best_th {
-                best_th = th;
-                best = Some(ev(th));
-            }
+        if let Some(th) = th
+            && th < best_th
+        {
+            best_th = th;
+            best = Some(ev(th));
         }
     }
     best
@@ -670,14 +670,14 @@ pub fn integrate_contact(
         positive("tolerance.rtol", tol.rtol)?;
         positive("tolerance.atol", tol.atol)?;
     }
-    if let Method::Rk4 { steps_per_tc } = method {
-        if steps_per_tc == 0 {
-            return Err(SimError::InvalidParameter {
-                name: "steps_per_tc".to_string(),
-                value: 0.0,
-                requirement: ">= 1",
-            });
-        }
+    if let Method::Rk4 { steps_per_tc } = method
+        && steps_per_tc == 0
+    {
+        return Err(SimError::InvalidParameter {
+            name: "steps_per_tc".to_string(),
+            value: 0.0,
+            requirement: ">= 1",
+        });
     }
     positive("limits.max_time_tc", limits.max_time_tc)?;
     positive("limits.max_step_tc", limits.max_step_tc)?;
