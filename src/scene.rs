@@ -484,8 +484,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             }
         }
         Separability {
-            overlap_share: (overlap / total_prior).clamp(0.0, 1.0),
-            bayes_error: (error / total_prior).clamp(0.0, 1.0),
+            overlap_share: (overlap / total_prior).max(0.0).min(1.0),
+            bayes_error: (error / total_prior).max(0.0).min(1.0),
         }
     }
 

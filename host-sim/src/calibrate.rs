@@ -84,6 +84,22 @@ pub fn skewness(series: &[(f64, f64)], cut: f64) -> f64 {
     }
 }
 
+/// The force of the series `series` (`(t_s, force_n)`, sorted by time) at `t_s`, linearly
+/// interpolated and clamped at zero; 0 outside the series.
+fn force_at(series: &[(f64, f64)], t_s: f64) -> f64 {
+    let (Some(first), Some(last)) = (series.first(), series.last()) else {
+        return 0.0;
+    };
+    if t_s <= first.0 || t_s >= last.0 {
+        return 0.0;
+    }
+    let i = series
+        .partition_point(|p| p.0 <= t_s)
+        .clamp(1, series.len() - 1);
+    let (a, b) = (series[i - 1], series[i]);
+    (a.1 + (b.1 - a.1) * (t_s - a.0) / (b.0 - a.0)).max(0.0)
+}
+
 /// The largest `|ln q_sampled - ln q|` of the force series `series` (`(t_s, force_n)`) sampled
 /// every `1 / sample_rate_hz` at 16 phases: `q_sampled = (sum v^2 / (C_ENERGY F^2)) /
 /// (sum v / (C_AREA F))` with the series' own peak `F`, against the same from the fine series.
@@ -101,16 +117,7 @@ pub fn sampled_shape_spread(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
     let fine_sq: f64 = series.iter().map(|p| p.1.max(0.0).powi(2)).sum();
     let reference = ln_q(fine_sum, fine_sq);
     let dt = 1.0 / sample_rate_hz;
-    let at = |t: f64| -> f64 {
-        if t <= first.0 || t >= last.0 {
-            return 0.0;
-        }
-        let i = series
-            .partition_point(|p| p.0 <= t)
-            .clamp(1, series.len() - 1);
-        let (a, b) = (series[i - 1], series[i]);
-        (a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)).max(0.0)
-    };
+    let at = |t: f64| force_at(series, t);
     let mut worst = 0.0f64;
     for k in 0..16 {
         let (mut sum, mut sum_sq) = (0.0, 0.0);
@@ -139,16 +146,7 @@ pub fn sharpest_bend(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
         return 0.0;
     }
     let dt = 1.0 / sample_rate_hz;
-    let at = |t: f64| -> f64 {
-        if t <= first.0 || t >= last.0 {
-            return 0.0;
-        }
-        let i = series
-            .partition_point(|p| p.0 <= t)
-            .clamp(1, series.len() - 1);
-        let (a, b) = (series[i - 1], series[i]);
-        (a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)).max(0.0)
-    };
+    let at = |t: f64| force_at(series, t);
     let mut worst = 0.0f64;
     for k in 0..16 {
         let mut t = first.0 - 2.0 * dt + dt * k as f64 / 16.0;

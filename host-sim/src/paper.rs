@@ -1114,12 +1114,17 @@ pub fn run(args: &PaperArgs) -> anyhow::Result<()> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut files = write_csvs(&res, &args.out)?;
     files.extend(write_svgs(&res, &args.out)?);
+    print_written(&files);
+    Ok(())
+}
+
+/// Lists the files a command wrote, after a blank line.
+pub(crate) fn print_written(files: &[std::path::PathBuf]) {
     println!();
     println!("Wrote:");
     for f in files {
         println!("  {}", f.display());
     }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -1640,11 +1640,7 @@ pub fn run(args: &TradeoffArgs) -> Result<()> {
     print!("{}", render_table(&t));
     println!("Run time: {:.1} s.", t.runtime_s);
     let files = write_outputs(&t, &args.out)?;
-    println!();
-    println!("Wrote:");
-    for f in files {
-        println!("  {}", f.display());
-    }
+    crate::paper::print_written(&files);
     Ok(())
 }
 
