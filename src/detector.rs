@@ -153,7 +153,7 @@ impl Pulse {
         sum_sq: 0.0,
         prev: 0.0,
         min_curvature: 0.0,
-        top: 0,
+        top: i32::MIN,
         run: 0,
         flat: 0,
         drift: false,
@@ -218,6 +218,9 @@ pub struct Detector<M: Backend = DefaultBackend> {
     max_samples: u32,
     alpha: f32,
     stuck_limit: u16,
+    /// At least one count of noise at the ADC: identical raw samples are then a sign of a
+    /// stuck or clipped sensor.
+    adc_noisy: bool,
     adc_min: i32,
     adc_max: i32,
     dt_s: f32,
@@ -225,7 +228,7 @@ pub struct Detector<M: Backend = DefaultBackend> {
     baseline: f32,
     previous: i32,
     same_run: u16,
-    pre: [i32; PRE_TRIGGER],
+    pre: [f32; PRE_TRIGGER],
     pre_next: usize,
     pre_start: usize,
     state: State,
@@ -251,7 +254,9 @@ impl<M: Backend> Detector<M> {
             .min(u16::MAX as f32) as u16;
         let max_samples =
             (3.0 * long * fs + PRE_TRIGGER as f32 + hold as f32).min(u32::MAX as f32 / 2.0) as u32;
-        let noise = sensor.noise_rms_counts;
+        // The equaliser colours and scales the ADC's white noise by its noise gain.
+        let noise = sensor.noise_rms_counts * scene.equaliser().noise_gain();
+        let adc_noisy = sensor.noise_rms_counts >= 1.0;
         Self {
             trigger: (s.trigger_sigmas * noise).max(2.0),
             release: (s.release_sigmas * noise).max(1.0),
@@ -265,7 +270,8 @@ impl<M: Backend> Detector<M> {
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
-            stuck_limit: if noise >= 1.0 { s.stuck_samples } else { 0 },
+            stuck_limit: if adc_noisy { s.stuck_samples } else { 0 },
+            adc_noisy,
             adc_min: sensor.adc_min,
             adc_max: sensor.adc_max,
             dt_s: 1.0 / fs,
@@ -273,7 +279,7 @@ impl<M: Backend> Detector<M> {
             baseline: 0.0,
             previous: 0,
             same_run: 0,
-            pre: [0; PRE_TRIGGER],
+            pre: [0.0; PRE_TRIGGER],
             pre_next: 0,
             pre_start: 0,
             state: State::Unprimed,
@@ -309,6 +315,14 @@ impl<M: Backend> Detector<M> {
     /// `O(1)` work and memory per sample.
     #[inline(always)]
     pub fn feed(&mut self, sample: i32) -> Option<Detection> {
+        self.feed_value(sample, sample as f32)
+    }
+
+    /// Feeds one sample as the ADC gave it (`raw`: saturation and stuck runs are seen there)
+    /// and as the equaliser reconstructed it (`value`, counts of the rigid plate: everything
+    /// else is measured on it). [`Detector::feed`] is `feed_value(s, s as f32)`.
+    #[inline(always)]
+    pub fn feed_value(&mut self, sample: i32, value: f32) -> Option<Detection> {
         let index = self.next_index;
         self.next_index = index.wrapping_add(1);
         let stuck = if sample == self.previous {
@@ -320,9 +334,9 @@ impl<M: Backend> Detector<M> {
         };
         match self.state {
             State::Idle => {
-                let v = sample as f32 - self.baseline;
+                let v = value - self.baseline;
                 if v > self.trigger || sample >= self.adc_max {
-                    return self.trigger(sample, index, false).or(stuck);
+                    return self.trigger(sample, value, index, false).or(stuck);
                 }
                 // A sample far below the baseline moves it by at most the trigger level.
                 let step = if v < -self.trigger { -self.trigger } else { v };
@@ -330,19 +344,19 @@ impl<M: Backend> Detector<M> {
                 // Ring of the last PRE_TRIGGER samples (a power of two: the mask keeps the
                 // index in bounds, so the check compiles away).
                 if let Some(slot) = self.pre.get_mut(self.pre_next & (PRE_TRIGGER - 1)) {
-                    *slot = sample;
+                    *slot = value;
                 }
                 self.pre_next = self.pre_next.wrapping_add(1);
                 stuck
             }
-            State::Active => self.active(sample, index).or(stuck),
+            State::Active => self.active(sample, value, index).or(stuck),
             State::Recovering(track) => {
-                self.recover(sample, track);
+                self.recover(value, track);
                 stuck
             }
-            State::Resumed => self.resume(sample, index).or(stuck),
+            State::Resumed => self.resume(sample, value, index).or(stuck),
             State::Unprimed => {
-                self.prime(sample);
+                self.prime(value);
                 None
             }
         }
@@ -355,6 +369,18 @@ impl<M: Backend> Detector<M> {
     /// [`crate::Monitor::feed_slice`].
     #[inline]
     pub fn feed_quiet<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> usize {
+        self.feed_quiet_values(samples.iter().map(|&s| {
+            let x: i32 = s.into();
+            (x, x as f32)
+        }))
+    }
+
+    /// [`Detector::feed_quiet`] for samples given as `(raw, value)` pairs (see
+    /// [`Detector::feed_value`]): the loop behind an equalised [`crate::Monitor::feed_slice`].
+    /// The pair that stops the loop is taken from the iterator but not fed: the caller goes on
+    /// from the returned count in its own slices.
+    #[inline(always)]
+    pub fn feed_quiet_values(&mut self, samples: impl Iterator<Item = (i32, f32)>) -> usize {
         if self.state != State::Idle {
             return 0;
         }
@@ -365,9 +391,8 @@ impl<M: Backend> Detector<M> {
         let (mut baseline, mut previous, mut run, mut next) =
             (self.baseline, self.previous, self.same_run, self.pre_next);
         let mut n = 0usize;
-        for &s in samples {
-            let x: i32 = s.into();
-            let v = x as f32 - baseline;
+        for (x, value) in samples {
+            let v = value - baseline;
             if v > trigger || x >= adc_max {
                 break;
             }
@@ -382,7 +407,7 @@ impl<M: Backend> Detector<M> {
             }
             baseline += if v < floor { floor } else { v } * alpha;
             if let Some(slot) = self.pre.get_mut(next & (PRE_TRIGGER - 1)) {
-                *slot = x;
+                *slot = value;
             }
             next = next.wrapping_add(1);
             n += 1;
@@ -449,13 +474,13 @@ impl<M: Backend> Detector<M> {
     /// is not seen: at 100 kS/s that is the first 0.32 ms after start).
     #[cold]
     #[inline(never)]
-    fn prime(&mut self, sample: i32) {
+    fn prime(&mut self, value: f32) {
         if let Some(slot) = self.pre.get_mut(self.pre_next & (PRE_TRIGGER - 1)) {
-            *slot = sample;
+            *slot = value;
         }
         self.pre_next = self.pre_next.wrapping_add(1);
         if self.pre_next >= PRE_TRIGGER {
-            let sum: f32 = self.pre.iter().map(|&v| v as f32).sum();
+            let sum: f32 = self.pre.iter().sum();
             self.baseline = sum / PRE_TRIGGER as f32;
             self.pre_start = self.pre_next;
             self.state = State::Idle;
@@ -467,12 +492,12 @@ impl<M: Backend> Detector<M> {
     /// than when idle (a DC step is followed within about `tau / 16`); after a gap it is frozen.
     #[cold]
     #[inline(never)]
-    fn recover(&mut self, sample: i32, track: bool) {
+    fn recover(&mut self, value: f32, track: bool) {
         if track {
             let fast = (16.0 * self.alpha).min(1.0);
-            self.baseline += (sample as f32 - self.baseline) * fast;
+            self.baseline += (value - self.baseline) * fast;
         }
-        if (sample as f32 - self.baseline) <= self.release {
+        if (value - self.baseline) <= self.release {
             self.pulse.below_release = self.pulse.below_release.saturating_add(1);
             if self.pulse.below_release >= self.hold {
                 self.state = State::Idle;
@@ -486,18 +511,18 @@ impl<M: Backend> Detector<M> {
     /// First sample after a gap: a pulse already above the trigger lost its start.
     #[cold]
     #[inline(never)]
-    fn resume(&mut self, sample: i32, index: u64) -> Option<Detection> {
+    fn resume(&mut self, sample: i32, value: f32, index: u64) -> Option<Detection> {
         self.state = State::Idle;
-        let v = sample as f32 - self.baseline;
+        let v = value - self.baseline;
         if v > self.trigger || sample >= self.adc_max {
-            return self.trigger(sample, index, true);
+            return self.trigger(sample, value, index, true);
         }
-        self.track_baseline(sample);
+        self.track_baseline(value);
         None
     }
 
-    fn track_baseline(&mut self, sample: i32) {
-        let v = sample as f32 - self.baseline;
+    fn track_baseline(&mut self, value: f32) {
+        let v = value - self.baseline;
         let step = if v < -self.trigger { -self.trigger } else { v };
         self.baseline += step * self.alpha;
     }
@@ -505,7 +530,13 @@ impl<M: Backend> Detector<M> {
     /// Starts a pulse with the pre-trigger samples, oldest first.
     #[cold]
     #[inline(never)]
-    fn trigger(&mut self, sample: i32, index: u64, after_gap: bool) -> Option<Detection> {
+    fn trigger(
+        &mut self,
+        sample: i32,
+        value: f32,
+        index: u64,
+        after_gap: bool,
+    ) -> Option<Detection> {
         let mut p = Pulse::EMPTY;
         let len = self.pre_next.wrapping_sub(self.pre_start).min(PRE_TRIGGER);
         let first = self.pre_next.wrapping_sub(len);
@@ -513,7 +544,7 @@ impl<M: Backend> Detector<M> {
         let mut old_sum = 0.0;
         for k in 0..len {
             let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
-            let w = self.pre.get(i).copied().unwrap_or(0) as f32 - self.baseline;
+            let w = self.pre.get(i).copied().unwrap_or(0.0) - self.baseline;
             p.samples += 1;
             p.sum += w;
             p.sum_sq += w * w;
@@ -529,12 +560,12 @@ impl<M: Backend> Detector<M> {
         p.after_gap = after_gap;
         self.pulse = p;
         self.state = State::Active;
-        self.active(sample, index)
+        self.active(sample, value, index)
     }
 
     #[inline(never)]
-    fn active(&mut self, sample: i32, index: u64) -> Option<Detection> {
-        let v = sample as f32 - self.baseline;
+    fn active(&mut self, sample: i32, value: f32, index: u64) -> Option<Detection> {
+        let v = value - self.baseline;
         let p = &mut self.pulse;
         p.samples = p.samples.saturating_add(1);
         p.sum += v;
@@ -546,7 +577,12 @@ impl<M: Backend> Detector<M> {
         if sample >= self.adc_max || sample <= self.adc_min {
             p.saturated = true;
         }
-        if sample == p.top {
+        // Runs at the largest raw sample (a clipped top is flat in what the ADC gave).
+        if sample > p.top {
+            p.top = sample;
+            p.run = 1;
+            p.flat = 1;
+        } else if sample == p.top {
             p.run = p.run.saturating_add(1);
             p.flat = p.flat.max(p.run);
         } else {
@@ -568,9 +604,6 @@ impl<M: Backend> Detector<M> {
                 p.pileup = true;
             }
             p.max = v;
-            p.top = sample;
-            p.run = 1;
-            p.flat = 1;
             p.max_at = index;
             p.before_max = p.last;
             p.after_known = false;
@@ -682,7 +715,7 @@ impl<M: Backend> Detector<M> {
         // A clipped top: a run of identical samples at the maximum, longer than noise makes by
         // chance and than a long pulse's own flat top (`duration / 20` samples).
         let flat_limit = (0.05 * duration).max(FLAT_TOP_SAMPLES as f32);
-        if self.noise >= 1.0 && p.flat as f32 >= flat_limit {
+        if self.adc_noisy && p.flat as f32 >= flat_limit {
             return reject(RejectReason::Saturated);
         }
         // The sharpest bend a Hertz pulse of this peak and duration has (see the module docs).

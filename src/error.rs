@@ -1,5 +1,7 @@
 //! The one error type of the kernel: what a scene or a model input can be wrong with.
 
+use crate::equaliser::{ChainFault, ChainStage};
+
 /// A parameter the kernel refused, with the name of the parameter.
 ///
 /// Every constructor and closed form returns this instead of panicking or returning a
@@ -24,6 +26,13 @@ pub enum Error {
     TooManyClasses,
     /// The setting is outside its documented range (for example a confidence outside `(0.5, 1)`).
     OutOfRange(&'static str),
+    /// A stage of the sensor chain cannot be inverted (see [`crate::equaliser`]).
+    Chain {
+        /// The stage.
+        stage: ChainStage,
+        /// What is wrong with it.
+        fault: ChainFault,
+    },
 }
 
 impl core::fmt::Display for Error {
@@ -37,6 +46,7 @@ impl core::fmt::Display for Error {
             Error::TooFewClasses => write!(f, "a scene needs at least two classes"),
             Error::TooManyClasses => write!(f, "more classes than the scene's capacity"),
             Error::OutOfRange(p) => write!(f, "{p} is outside its allowed range"),
+            Error::Chain { stage, fault } => write!(f, "sensor chain, {stage:?}: {fault:?}"),
         }
     }
 }

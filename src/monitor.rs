@@ -3,6 +3,7 @@
 use crate::classifier::{Measurement, Verdict};
 use crate::counters::Counters;
 use crate::detector::{Detection, Detector};
+use crate::equaliser::Equaliser;
 use crate::math::{Backend, DefaultBackend};
 use crate::scene::{DEFAULT_CLASSES, Scene};
 
@@ -35,15 +36,20 @@ pub enum Event {
 #[derive(Debug, Clone)]
 pub struct Monitor<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> {
     scene: Scene<N, M>,
+    equaliser: Equaliser,
     detector: Detector<M>,
     counters: Counters<N>,
 }
+
+/// Samples equalised at a time by [`Monitor::feed_slice`] (its stack buffer, 4 bytes each).
+pub const EQUALISE_BLOCK: usize = 32;
 
 impl<const N: usize, M: Backend> Monitor<N, M> {
     /// A monitor for a built scene.
     pub fn new(scene: Scene<N, M>) -> Self {
         let detector = Detector::new(&scene);
         Self {
+            equaliser: Equaliser::new(scene.equaliser()),
             scene,
             detector,
             counters: Counters::default(),
@@ -53,7 +59,14 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
     /// Feeds one ADC sample; returns an event when a pulse ends or the sensor is stuck.
     #[inline(always)]
     pub fn feed(&mut self, sample: i32) -> Option<Event> {
-        let d = self.detector.feed(sample)?;
+        let d = if self.equaliser.design().is_identity() {
+            self.detector.feed(sample)?
+        } else {
+            let mut value = [0.0f32];
+            self.equaliser.process(&[sample], &mut value);
+            let [value] = value;
+            self.detector.feed_value(sample, value)?
+        };
         Some(self.handle(d))
     }
 
@@ -65,6 +78,12 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
         samples: &[S],
         mut on_event: impl FnMut(Event),
     ) {
+        if !self.equaliser.design().is_identity() {
+            for block in samples.chunks(EQUALISE_BLOCK) {
+                self.feed_block_equalised(block, &mut on_event);
+            }
+            return;
+        }
         let mut rest = samples;
         loop {
             let quiet = self.detector.feed_quiet(rest);
@@ -79,11 +98,39 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
         }
     }
 
+    /// One block of at most [`EQUALISE_BLOCK`] samples through the equaliser, then the
+    /// detector: its quiet loop as far as it goes, one sample at a time where something happens.
+    fn feed_block_equalised<S: Copy + Into<i32>>(
+        &mut self,
+        block: &[S],
+        on_event: &mut impl FnMut(Event),
+    ) {
+        let mut values = [0.0f32; EQUALISE_BLOCK];
+        self.equaliser.process(block, &mut values);
+        let values = values.get(..block.len()).unwrap_or(&[]);
+        let mut at = 0;
+        loop {
+            let raw = block.get(at..).unwrap_or(&[]);
+            let rest = values.get(at..).unwrap_or(&[]);
+            let pairs = raw.iter().map(|&s| s.into()).zip(rest.iter().copied());
+            at += self.detector.feed_quiet_values(pairs);
+            let (Some(&s), Some(&v)) = (block.get(at), values.get(at)) else {
+                return;
+            };
+            if let Some(d) = self.detector.feed_value(s.into(), v) {
+                on_event(self.handle(d));
+            }
+            at += 1;
+        }
+    }
+
     /// Reports `lost` dropped samples (see [`Detector::gap`]).
     pub fn gap(&mut self, lost: u32) -> Option<Event> {
         self.counters.gaps = self.counters.gaps.saturating_add(1);
         self.counters.lost_samples = self.counters.lost_samples.saturating_add(lost as u64);
         let d = self.detector.gap(lost);
+        // What the chain rang during the gap is unknown: the equaliser starts afresh.
+        self.equaliser.reset();
         self.sync();
         Some(self.handle(d?))
     }
@@ -115,6 +162,9 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
         match d {
             Detection::Stuck { at_sample } => Event::Stuck { at_sample },
             Detection::Pulse { at_sample, outcome } => {
+                // The equaliser's output lags the ADC by its delay.
+                let at_sample =
+                    at_sample.saturating_sub(self.equaliser.design().delay_samples() as u64);
                 let (verdict, measurement) = match outcome {
                     Ok(m) => (self.scene.classify(&m), Some(m)),
                     Err(r) => (Verdict::Rejected(r), None),

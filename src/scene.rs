@@ -4,6 +4,7 @@
 use heapless::{String, Vec};
 
 use crate::envelope::{Envelope, Range};
+use crate::equaliser::{ChainDynamics, EqualiserDesign};
 use crate::error::{Error, positive, representable};
 use crate::hertz;
 use crate::material::{Material, effective_modulus_pa};
@@ -82,6 +83,9 @@ pub struct SensorChain {
     pub adc_min: i32,
     /// Highest ADC code (a sample at or above it is saturated).
     pub adc_max: i32,
+    /// The beam's modes and the accelerometer's resonance between the plate and the ADC,
+    /// which the node inverts before it detects anything ([`ChainDynamics::RIGID`]: none).
+    pub dynamics: ChainDynamics,
 }
 
 impl SensorChain {
@@ -102,7 +106,14 @@ impl SensorChain {
             noise_rms_counts,
             adc_min: (-half) as i32,
             adc_max: (half - 1) as i32,
+            dynamics: ChainDynamics::RIGID,
         }
+    }
+
+    /// The same chain with the beam modes and accelerometer resonance `dynamics`.
+    pub fn with_dynamics(mut self, dynamics: ChainDynamics) -> Self {
+        self.dynamics = dynamics;
+        self
     }
 
     fn check(&self) -> Result<(), Error> {
@@ -293,6 +304,7 @@ pub struct Scene<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> 
     envelopes: Vec<Envelope, N>,
     ln_priors: Vec<f32, N>,
     sensor: SensorChain,
+    equaliser: EqualiserDesign,
     settings: Settings,
     separability: Separability,
     shortest_duration_s: f32,
@@ -316,6 +328,11 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         plate.validate()?;
         sensor.check()?;
         settings.check()?;
+        let equaliser = if sensor.dynamics.is_rigid() {
+            EqualiserDesign::IDENTITY
+        } else {
+            EqualiserDesign::new::<M>(&sensor.dynamics, sensor.sample_rate_hz)?
+        };
         if classes.len() < 2 {
             return Err(Error::TooFewClasses);
         }
@@ -374,6 +391,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             envelopes,
             ln_priors,
             sensor,
+            equaliser,
             settings,
             separability: Separability {
                 overlap_share: 0.0,
@@ -410,6 +428,11 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// The sensor chain.
     pub fn sensor(&self) -> &SensorChain {
         &self.sensor
+    }
+
+    /// The equaliser that inverts the sensor chain (the identity for a rigid chain).
+    pub fn equaliser(&self) -> &EqualiserDesign {
+        &self.equaliser
     }
 
     /// The settings.

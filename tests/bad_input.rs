@@ -53,6 +53,7 @@ fn base() -> Parts {
             noise_rms_counts: 4.0,
             adc_min: -32768,
             adc_max: 32767,
+            dynamics: coalshock::ChainDynamics::RIGID,
         },
         settings: Settings::default(),
     }

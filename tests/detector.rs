@@ -28,6 +28,7 @@ fn scene(rate_hz: f32, noise: f32) -> Scene {
             noise_rms_counts: noise,
             adc_min: -32768,
             adc_max: 32767,
+            dynamics: coalshock::ChainDynamics::RIGID,
         },
         Settings::default(),
     )

@@ -1035,6 +1035,7 @@ fn sensor_field() -> impl Strategy<Value = SensorChain> {
             noise_rms_counts: noise,
             adc_min: lo,
             adc_max: hi,
+            dynamics: coalshock::ChainDynamics::RIGID,
         })
 }
 

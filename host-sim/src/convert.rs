@@ -5,7 +5,8 @@
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{
-    ContactCalibration, Material, Measurement, ParticleClass, Range, Scene, SensorChain, Settings,
+    Accelerometer, BeamMode, ChainDynamics, ContactCalibration, Material, Measurement, ParticleClass,
+    Range, Scene, SensorChain, Settings,
     Speed,
 };
 
@@ -77,16 +78,34 @@ pub fn class_to_kernel(c: &ClassSpec) -> ParticleClass {
 }
 
 /// The sensor chain the kernel inverts: `SensorChain::from_plate(f_s, M, S, noise, bits)`,
-/// i.e. `force_per_count_n = M / S` (N per count) and the ADC range of `bits`. Only the rigid
-/// part is carried: the kernel does not model resonances, modes, offset or drift.
-pub fn sensor_to_kernel(s: &SensorSpec) -> SensorChain {
-    SensorChain::from_plate(
+/// i.e. `force_per_count_n = M / S` (N per count) and the ADC range of `bits`, with the beam
+/// modes and the accelerometer resonance as the kernel's `ChainDynamics` (offset and drift are
+/// the baseline's to follow). More modes than the kernel carries is [`ConvertError::Kernel`].
+pub fn sensor_to_kernel(s: &SensorSpec) -> Result<SensorChain, ConvertError> {
+    let mut dynamics = ChainDynamics::RIGID;
+    for m in &s.beam_modes {
+        dynamics = dynamics
+            .with_mode(BeamMode {
+                frequency_hz: m.frequency_hz as f32,
+                damping_ratio: m.damping_ratio as f32,
+                gain: m.gain as f32,
+            })
+            .map_err(ConvertError::Kernel)?;
+    }
+    if let Some(a) = &s.accelerometer {
+        dynamics = dynamics.with_accelerometer(Accelerometer {
+            frequency_hz: a.frequency_hz as f32,
+            damping_ratio: a.damping_ratio as f32,
+        });
+    }
+    Ok(SensorChain::from_plate(
         s.sample_rate_hz as f32,
         s.effective_mass_kg as f32,
         s.counts_per_m_s2 as f32,
         s.noise_rms_counts as f32,
         s.adc_bits,
     )
+    .with_dynamics(dynamics))
 }
 
 /// The kernel's default `Settings` with the file's overrides applied.
@@ -144,7 +163,7 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
     Scene::new(
         material_to_kernel(&scene.plate.material()),
         &classes,
-        sensor_to_kernel(&scene.sensor),
+        sensor_to_kernel(&scene.sensor)?,
         calibrated_settings(scene)?,
     )
     .map_err(ConvertError::Kernel)

@@ -1,0 +1,589 @@
+//! The sensor chain's inverse: turns ADC samples back into the contact force, in counts of the
+//! rigid plate, before anything is detected.
+//!
+//! The chain (host-sim integrates the same one exactly): the rigid beam `u = S F / M` (counts);
+//! base-excited beam modes `H_b(s) = 1 + sum_j g_j s^2 / d_j(s)` with
+//! `d_j(s) = s^2 + 2 zeta_j w_j s + w_j^2` (`w_j = 2 pi f_j`); an accelerometer
+//! `H_a(s) = w_a^2 / (s^2 + 2 zeta_a w_a s + w_a^2)`; sampling at `f_s = 1 / T`.
+//!
+//! **Beam modes.** `H_b = N(s) / prod_j d_j(s)` with `N = prod_j d_j + sum_j g_j s^2 prod_(k != j) d_k`.
+//! The inverse `1 / H_b` has the modes' poles as its zeros and the chain's zeros (the roots of
+//! `N`) as its poles. The roots are found once, at build, by Aberth's method on `N'/N =
+//! H_b'/H_b + sum_j d_j'/d_j` (`H_b` evaluated directly, never expanded into a polynomial),
+//! in units of the highest mode's `w`. A root in the right half-plane (a chain that is not
+//! minimum phase) is refused. With positive gains the zeros interlace with the modes and lie
+//! in the left half-plane whatever the damping.
+//!
+//! *Discretisation: matched pole-zero.* Every pole and zero `p` of `1 / H_b` maps to `e^(p T)`;
+//! one second-order section per mode (the mode's poles over the nearest pair of chain zeros),
+//! each with unit gain at DC. A section is written in `w = z - 1` (the delta operator):
+//! `k (w^2 + f1 w + f0) / (w^2 + e1 w + e0)` with `e1 = 2 (1 - r) + 4 r sin^2(theta / 2)` and
+//! `e0 = (1 - r)^2 + 4 r sin^2(theta / 2)` for a pair `r e^(+-i theta)`: small numbers that f32
+//! carries to full relative precision, where the usual `a1 = -2 r cos(theta)` rounds a 180 Hz
+//! mode at 100 kS/s by 0.2 % of its `theta^2` and left 4e-3 of error at its antiresonance.
+//! Why matched: the free ring-down of a mode,
+//! sampled, is exactly `sum c e^(p n T)`, which the section's numerator annihilates at any
+//! sample rate, so ringing from earlier impacts never reaches the detector; a bilinear map
+//! would move the zeros off `e^(p T)` (pre-warping fixes one frequency, not the damping), and
+//! inverting an exact first-order-hold model was 5-50 times less accurate on the forced pulse
+//! (its extra zero) in the prototype. The forced pulse is reconstructed to 1e-3 of its peak
+//! down to 4 samples per pulse (`tests/equaliser.rs` checks it against host-sim's exact
+//! chain). Memory: five coefficients and two states per mode.
+//!
+//! **Accelerometer.** Its roll-off cannot be inverted past the sampled band (the exact inverse
+//! `1 + (2 zeta_a / w_a) s + s^2 / w_a^2` is improper and its noise grows as `f^2`). It is
+//! regularised to the sampled band: `s` and `s^2` become central differences, a three-tap FIR
+//! `b_(n-1) = (a + b) y_n + (1 - 2 a) y_(n-1) + (a - b) y_(n-2)` with `a = 1 / (w_a T)^2`,
+//! `b = zeta_a / (w_a T)`, exact at DC and within `(w T)^2 / 12` of the exact correction at
+//! frequency `w` (a one-sample delay, which [`crate::Monitor`] takes off the reported index).
+//! What it costs in noise is its white-noise gain `sqrt((a + b)^2 + (1 - 2 a)^2 + (a - b)^2)`,
+//! part of [`EqualiserDesign::noise_gain`].
+//!
+//! A rigid chain (no mode, no accelerometer) runs no filter at all.
+
+use crate::error::Error;
+use crate::math::Backend;
+
+/// Most beam modes a chain can carry.
+pub const MAX_MODES: usize = 4;
+
+/// Length of the impulse response summed at build for the noise gain (samples).
+const NOISE_TAPS: usize = 2048;
+
+/// Aberth iterations at most (each one `O(modes^2)`); they converge in 10-30.
+const ROOT_ITERATIONS: usize = 200;
+
+/// One base-excited beam mode: `g s^2 / (s^2 + 2 zeta w s + w^2)` added to the rigid path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BeamMode {
+    /// Natural frequency `f = w / (2 pi)` in Hz, below the Nyquist frequency.
+    pub frequency_hz: f32,
+    /// Damping ratio `zeta`, in `(0, 1)`.
+    pub damping_ratio: f32,
+    /// Gain `g` (dimensionless): the mode raises the peak of a short pulse by `g` of it.
+    pub gain: f32,
+}
+
+/// The accelerometer's own resonance: `w^2 / (s^2 + 2 zeta w s + w^2)`, unit gain at DC.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Accelerometer {
+    /// Resonance frequency in Hz (may lie above the Nyquist frequency).
+    pub frequency_hz: f32,
+    /// Damping ratio, in `(0, 1)`.
+    pub damping_ratio: f32,
+}
+
+/// The chain's linear dynamics between the rigid plate and the ADC; every stage optional.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChainDynamics {
+    /// Beam modes, the first `mode_count` in use.
+    pub modes: [BeamMode; MAX_MODES],
+    /// Number of beam modes in use (`0..=MAX_MODES`).
+    pub mode_count: u8,
+    /// The accelerometer's resonance, if modelled.
+    pub accelerometer: Option<Accelerometer>,
+}
+
+impl ChainDynamics {
+    /// A rigid plate under an ideal accelerometer: nothing to invert.
+    pub const RIGID: ChainDynamics = ChainDynamics {
+        modes: [BeamMode {
+            frequency_hz: 0.0,
+            damping_ratio: 0.0,
+            gain: 0.0,
+        }; MAX_MODES],
+        mode_count: 0,
+        accelerometer: None,
+    };
+
+    /// Adds a beam mode; [`Error::Chain`] with [`ChainFault::TooManyModes`] past [`MAX_MODES`].
+    pub fn with_mode(mut self, mode: BeamMode) -> Result<Self, Error> {
+        let slot = self.modes.get_mut(self.mode_count as usize).ok_or(Error::Chain {
+            stage: ChainStage::BeamMode(self.mode_count),
+            fault: ChainFault::TooManyModes,
+        })?;
+        *slot = mode;
+        self.mode_count += 1;
+        Ok(self)
+    }
+
+    /// Sets the accelerometer resonance.
+    pub fn with_accelerometer(mut self, accelerometer: Accelerometer) -> Self {
+        self.accelerometer = Some(accelerometer);
+        self
+    }
+
+    /// The beam modes in use.
+    pub fn modes(&self) -> &[BeamMode] {
+        self.modes.get(..self.mode_count as usize).unwrap_or(&[])
+    }
+
+    /// `true` when there is nothing to invert.
+    pub fn is_rigid(&self) -> bool {
+        self.mode_count == 0 && self.accelerometer.is_none()
+    }
+}
+
+/// Which stage of the chain a [`ChainFault`] is in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ChainStage {
+    /// Beam mode number `i` (from 0).
+    BeamMode(u8),
+    /// The accelerometer resonance.
+    Accelerometer,
+    /// The beam modes together (their zeros).
+    Beam,
+}
+
+/// What is wrong with a chain stage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ChainFault {
+    /// A parameter is NaN or infinite.
+    NonFinite,
+    /// The frequency is zero or negative.
+    FrequencyNotPositive,
+    /// A beam mode at or above the Nyquist frequency `f_s / 2`: it cannot be sampled.
+    AboveNyquist,
+    /// The damping ratio is not in `(0, 1)`: an undamped stage never stops ringing, an
+    /// overdamped one is no resonance.
+    DampingOutOfRange,
+    /// The gain is `<= -1`, or the modes' gains make the chain non-minimum-phase (a zero in the
+    /// right half-plane): its inverse would be unstable.
+    NonMinimumPhase,
+    /// The chain's zeros could not be found to f32 precision (modes too close together).
+    NotConverged,
+    /// More than [`MAX_MODES`] modes.
+    TooManyModes,
+}
+
+/// One second-order section `k (w^2 + f1 w + f0) / (w^2 + e1 w + e0)` in `w = z - 1`, run as
+/// `y = k (v + g1 q + g0 p)`, `p <- p + q`, `q <- q + v - e1 q - e0 p` with `g1 = f1 - e1`,
+/// `g0 = f0 - e0` (`p = v / (w^2 + e1 w + e0)`, `q = w p`); `k = e0 / f0` gives unit DC gain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+struct Section {
+    k: f32,
+    g: [f32; 2],
+    e: [f32; 2],
+}
+
+impl Section {
+    const IDENTITY: Section = Section {
+        k: 1.0,
+        g: [0.0, 0.0],
+        e: [1.0, 1.0],
+    };
+}
+
+/// The equaliser of a chain, discretised at the scene's sample rate (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EqualiserDesign {
+    sections: [Section; MAX_MODES],
+    section_count: u8,
+    taps: Option<[f32; 3]>,
+    noise_gain: f32,
+}
+
+impl EqualiserDesign {
+    /// The identity (a rigid chain).
+    pub const IDENTITY: EqualiserDesign = EqualiserDesign {
+        sections: [Section::IDENTITY; MAX_MODES],
+        section_count: 0,
+        taps: None,
+        noise_gain: 1.0,
+    };
+
+    /// Designs the equaliser of `dynamics` at `sample_rate_hz`; refuses a stage that cannot be
+    /// inverted with [`Error::Chain`] naming it.
+    pub fn new<M: Backend>(dynamics: &ChainDynamics, sample_rate_hz: f32) -> Result<Self, Error> {
+        if dynamics.mode_count as usize > MAX_MODES {
+            return Err(chain(ChainStage::Beam, ChainFault::TooManyModes));
+        }
+        let t = 1.0 / sample_rate_hz;
+        let mut design = Self::IDENTITY;
+        for (i, m) in dynamics.modes().iter().enumerate() {
+            check_mode(m, i as u8, sample_rate_hz)?;
+        }
+        if let Some(a) = &dynamics.accelerometer {
+            design.taps = Some(accelerometer_taps(a, t)?);
+        }
+        if dynamics.mode_count > 0 {
+            let zeros = beam_zeros::<M>(dynamics.modes())?;
+            for (i, m) in dynamics.modes().iter().enumerate() {
+                let z = zeros.get(i).copied().unwrap_or_default();
+                if let Some(s) = design.sections.get_mut(i) {
+                    *s = matched_section::<M>(m, z, t);
+                }
+            }
+            design.section_count = dynamics.mode_count;
+        }
+        design.noise_gain = M::sqrt(design.impulse_energy().max(0.0));
+        Ok(design)
+    }
+
+    /// `true` when the equaliser does nothing (a rigid chain).
+    pub fn is_identity(&self) -> bool {
+        self.section_count == 0 && self.taps.is_none()
+    }
+
+    /// RMS of the equalised signal for unit white noise at the ADC:
+    /// `sqrt(sum_n h_n^2)` over the first 2048 samples of the impulse response.
+    pub fn noise_gain(&self) -> f32 {
+        self.noise_gain
+    }
+
+    /// Samples by which the equalised signal lags the input: 1 with an accelerometer stage.
+    pub fn delay_samples(&self) -> u32 {
+        self.taps.is_some() as u32
+    }
+
+    /// `sum h_n^2` of the impulse response (first [`NOISE_TAPS`] samples), from an impulse of
+    /// `2^16` counts after a reference sample of 0.
+    fn impulse_energy(&self) -> f32 {
+        let mut eq = Equaliser::new(self);
+        let mut out = [0.0f32; 64];
+        let mut sum = 0.0f32;
+        for block in 0..NOISE_TAPS / 64 {
+            let mut input = [0i32; 64];
+            if block == 0 {
+                if let Some(x) = input.get_mut(1) {
+                    *x = 1 << 16;
+                }
+            }
+            eq.process(&input, &mut out);
+            sum += out.iter().map(|v| v * v).sum::<f32>();
+        }
+        sum / (65536.0 * 65536.0)
+    }
+}
+
+fn chain(stage: ChainStage, fault: ChainFault) -> Error {
+    Error::Chain { stage, fault }
+}
+
+fn check_mode(m: &BeamMode, i: u8, fs: f32) -> Result<(), Error> {
+    let stage = ChainStage::BeamMode(i);
+    if !(m.frequency_hz.is_finite() && m.damping_ratio.is_finite() && m.gain.is_finite()) {
+        return Err(chain(stage, ChainFault::NonFinite));
+    }
+    if m.frequency_hz <= 0.0 {
+        return Err(chain(stage, ChainFault::FrequencyNotPositive));
+    }
+    if m.frequency_hz >= 0.5 * fs {
+        return Err(chain(stage, ChainFault::AboveNyquist));
+    }
+    if !(m.damping_ratio > 0.0 && m.damping_ratio < 1.0) {
+        return Err(chain(stage, ChainFault::DampingOutOfRange));
+    }
+    if m.gain <= -1.0 {
+        return Err(chain(stage, ChainFault::NonMinimumPhase));
+    }
+    Ok(())
+}
+
+/// The three central-difference taps of the accelerometer's inverse (module docs).
+fn accelerometer_taps(a: &Accelerometer, t: f32) -> Result<[f32; 3], Error> {
+    let stage = ChainStage::Accelerometer;
+    if !(a.frequency_hz.is_finite() && a.damping_ratio.is_finite()) {
+        return Err(chain(stage, ChainFault::NonFinite));
+    }
+    if a.frequency_hz <= 0.0 {
+        return Err(chain(stage, ChainFault::FrequencyNotPositive));
+    }
+    if !(a.damping_ratio > 0.0 && a.damping_ratio < 1.0) {
+        return Err(chain(stage, ChainFault::DampingOutOfRange));
+    }
+    let wt = 2.0 * core::f32::consts::PI * a.frequency_hz * t;
+    let (a2, b) = (1.0 / (wt * wt), a.damping_ratio / wt);
+    if !(a2.is_finite() && a2 < 1e6) {
+        // A resonance below 1/(2 pi 1000) of the sample rate: its inverse is pure noise.
+        return Err(chain(stage, ChainFault::FrequencyNotPositive));
+    }
+    Ok([a2 + b, 1.0 - 2.0 * a2, a2 - b])
+}
+
+/// A complex number in f32, just what Aberth's method needs.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct C {
+    re: f32,
+    im: f32,
+}
+
+impl C {
+    const fn new(re: f32, im: f32) -> Self {
+        Self { re, im }
+    }
+    fn add(self, o: C) -> C {
+        C::new(self.re + o.re, self.im + o.im)
+    }
+    fn sub(self, o: C) -> C {
+        C::new(self.re - o.re, self.im - o.im)
+    }
+    fn mul(self, o: C) -> C {
+        C::new(
+            self.re * o.re - self.im * o.im,
+            self.re * o.im + self.im * o.re,
+        )
+    }
+    fn norm2(self) -> f32 {
+        self.re * self.re + self.im * self.im
+    }
+    fn div(self, o: C) -> C {
+        let d = o.norm2();
+        C::new(
+            (self.re * o.re + self.im * o.im) / d,
+            (self.im * o.re - self.re * o.im) / d,
+        )
+    }
+    fn scale(self, k: f32) -> C {
+        C::new(self.re * k, self.im * k)
+    }
+}
+
+/// The zeros of the beam stage with positive imaginary part (one per mode, in the mode's
+/// order: each mode gets the zero nearest its own frequency), in rad/s.
+fn beam_zeros<M: Backend>(modes: &[BeamMode]) -> Result<[C; MAX_MODES], Error> {
+    let two_pi = 2.0 * core::f32::consts::PI;
+    let w_ref = modes
+        .iter()
+        .map(|m| two_pi * m.frequency_hz)
+        .fold(0.0f32, f32::max);
+    // Normalised modes: (w / w_ref, zeta, g).
+    let mut norm = [(0.0f32, 0.0f32, 0.0f32); MAX_MODES];
+    for (n, m) in norm.iter_mut().zip(modes) {
+        *n = (two_pi * m.frequency_hz / w_ref, m.damping_ratio, m.gain);
+    }
+    let norm = norm.get(..modes.len()).unwrap_or(&[]);
+    let count = 2 * modes.len();
+    // Starting points: each mode's zero if it were alone, `w / sqrt(1 + g)`, a little off
+    // the axis and turned so that no two coincide.
+    let mut roots = [C::default(); 2 * MAX_MODES];
+    for (k, (w, z, g)) in norm.iter().enumerate() {
+        let wz = *w / M::sqrt(1.0 + g.max(-0.9));
+        let tilt = 1.0 + 0.01 * (k as f32 + 1.0);
+        if let Some(r) = roots.get_mut(2 * k) {
+            *r = C::new(-z * wz * tilt - 0.01, wz);
+        }
+        if let Some(r) = roots.get_mut(2 * k + 1) {
+            *r = C::new(-z * wz / tilt - 0.02, -wz);
+        }
+    }
+    let roots_used = roots.get_mut(..count).unwrap_or(&mut []);
+    let mut converged = false;
+    for _ in 0..ROOT_ITERATIONS {
+        let mut largest_step = 0.0f32;
+        for k in 0..count {
+            let Some(sk) = roots_used.get(k).copied() else {
+                continue;
+            };
+            let ratio = newton_ratio(norm, sk);
+            let mut repel = C::default();
+            for (m, sm) in roots_used.iter().enumerate() {
+                if m != k {
+                    repel = repel.add(C::new(1.0, 0.0).div(sk.sub(*sm)));
+                }
+            }
+            let step = ratio.div(C::new(1.0, 0.0).sub(ratio.mul(repel)));
+            if !(step.re.is_finite() && step.im.is_finite()) {
+                return Err(chain(ChainStage::Beam, ChainFault::NotConverged));
+            }
+            largest_step = largest_step.max(step.norm2() / sk.norm2().max(1e-12));
+            if let Some(r) = roots_used.get_mut(k) {
+                *r = sk.sub(step);
+            }
+        }
+        if largest_step < 1e-12 {
+            converged = true;
+            break;
+        }
+    }
+    if !converged {
+        return Err(chain(ChainStage::Beam, ChainFault::NotConverged));
+    }
+    let mut out = [C::default(); MAX_MODES];
+    let mut used = [false; 2 * MAX_MODES];
+    for (slot, (w, _, _)) in out.iter_mut().zip(norm) {
+        // The unused root of non-negative imaginary part nearest this mode's frequency.
+        let mut best: Option<(usize, f32)> = None;
+        for (k, r) in roots_used.iter().enumerate() {
+            if r.re >= 0.0 {
+                return Err(chain(ChainStage::Beam, ChainFault::NonMinimumPhase));
+            }
+            let free = !used.get(k).copied().unwrap_or(true);
+            let distance = (M::sqrt(r.norm2()) - w).abs();
+            if free && r.im >= 0.0 && best.is_none_or(|(_, d)| distance < d) {
+                best = Some((k, distance));
+            }
+        }
+        let (k, _) = best.ok_or(chain(ChainStage::Beam, ChainFault::NotConverged))?;
+        if let Some(u) = used.get_mut(k) {
+            *u = true;
+        }
+        *slot = roots_used.get(k).copied().unwrap_or_default().scale(w_ref);
+    }
+    Ok(out)
+}
+
+/// `N(s) / N'(s)` of the beam stage at `s` (normalised units), through
+/// `N'/N = H'/H + sum_j d_j'/d_j`, `H = 1 + sum_j g_j s^2 / d_j`,
+/// `H' = sum_j g_j (2 s d_j - s^2 d_j') / d_j^2`, `d_j' = 2 s + 2 zeta_j w_j`.
+fn newton_ratio(modes: &[(f32, f32, f32)], s: C) -> C {
+    let s2 = s.mul(s);
+    let mut h = C::new(1.0, 0.0);
+    let mut dh = C::default();
+    let mut dd = C::default();
+    for &(w, z, g) in modes {
+        let d = s2.add(s.scale(2.0 * z * w)).add(C::new(w * w, 0.0));
+        let d1 = s.scale(2.0).add(C::new(2.0 * z * w, 0.0));
+        let term = s2.div(d);
+        h = h.add(term.scale(g));
+        dh = dh.add(s.scale(2.0).mul(d).sub(s2.mul(d1)).div(d.mul(d)).scale(g));
+        dd = dd.add(d1.div(d));
+    }
+    C::new(1.0, 0.0).div(dh.div(h).add(dd))
+}
+
+/// `1 - e^(-x)` for `x >= 0`, accurate for small `x`.
+fn one_minus_exp<M: Backend>(x: f32) -> f32 {
+    if x < 1e-2 {
+        x * (1.0 - x * (0.5 - x / 6.0))
+    } else {
+        1.0 - M::exp(-x)
+    }
+}
+
+/// `(w^2 + c1 w + c0)`, `w = z - 1`, of the pair `s = -sigma +- i omega` mapped by
+/// `z = e^(s T)` (`r = e^(-sigma T)`, `theta = omega T`): `[c1, c0]` with
+/// `c1 = 2 (1 - r) + 4 r sin^2(theta / 2)`, `c0 = (1 - r)^2 + 4 r sin^2(theta / 2)`.
+fn pair<M: Backend>(sigma: f32, omega: f32, t: f32) -> [f32; 2] {
+    let r = M::exp(-sigma * t);
+    let sin_half = libm::sinf(0.5 * omega * t);
+    let one_minus_r = one_minus_exp::<M>(sigma * t);
+    let bend = 4.0 * r * sin_half * sin_half;
+    [2.0 * one_minus_r + bend, one_minus_r * one_minus_r + bend]
+}
+
+/// Mode `m`'s section: its poles (the inverse's zeros) over the chain zero `zero` (rad/s),
+/// both matched, unit gain at DC.
+fn matched_section<M: Backend>(m: &BeamMode, zero: C, t: f32) -> Section {
+    let w = 2.0 * core::f32::consts::PI * m.frequency_hz;
+    let z = m.damping_ratio;
+    let [f1, f0] = pair::<M>(z * w, w * M::sqrt(1.0 - z * z), t);
+    let [e1, e0] = pair::<M>(-zero.re, zero.im, t);
+    Section {
+        k: e0 / f0,
+        g: [f1 - e1, f0 - e0],
+        e: [e1, e0],
+    }
+}
+
+/// The equaliser's state: fed raw samples, it gives the reconstructed force in counts of the
+/// rigid plate (see the module docs). Fixed size; `O(modes)` work per sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Equaliser {
+    design: EqualiserDesign,
+    /// States `(p, q)` of each section.
+    state: [[f32; 2]; MAX_MODES],
+    /// The two previous inputs of the accelerometer's FIR.
+    history: [f32; 2],
+    /// The first sample seen: every input is taken relative to it (and it is added back to
+    /// the output, the chain's DC gain being 1), so that the states stay small and keep
+    /// their f32 precision.
+    offset: Option<i32>,
+}
+
+impl Equaliser {
+    /// An equaliser at rest.
+    pub fn new(design: &EqualiserDesign) -> Self {
+        Self {
+            design: *design,
+            state: [[0.0; 2]; MAX_MODES],
+            history: [0.0; 2],
+            offset: None,
+        }
+    }
+
+    /// The design it runs.
+    pub fn design(&self) -> &EqualiserDesign {
+        &self.design
+    }
+
+    /// Forgets the past (after a gap in the stream): the next sample is the new reference.
+    pub fn reset(&mut self) {
+        *self = Self::new(&self.design);
+    }
+
+    /// Equalises `raw` into `out` (the shorter length of the two), sample by sample in order.
+    #[inline]
+    pub fn process<S: Copy + Into<i32>>(&mut self, raw: &[S], out: &mut [f32]) {
+        let acc = self.design.taps.is_some();
+        match (self.design.section_count, acc) {
+            (0, false) => self.run::<S, 0, false>(raw, out),
+            (0, true) => self.run::<S, 0, true>(raw, out),
+            (1, false) => self.run::<S, 1, false>(raw, out),
+            (1, true) => self.run::<S, 1, true>(raw, out),
+            (2, false) => self.run::<S, 2, false>(raw, out),
+            (2, true) => self.run::<S, 2, true>(raw, out),
+            (3, false) => self.run::<S, 3, false>(raw, out),
+            (3, true) => self.run::<S, 3, true>(raw, out),
+            (_, false) => self.run::<S, 4, false>(raw, out),
+            (_, true) => self.run::<S, 4, true>(raw, out),
+        }
+    }
+
+    /// The loop for `K` sections, with or without the accelerometer's FIR: coefficients and
+    /// states in locals so that they stay in registers.
+    #[inline(always)]
+    fn run<S: Copy + Into<i32>, const K: usize, const ACC: bool>(
+        &mut self,
+        raw: &[S],
+        out: &mut [f32],
+    ) {
+        let Some(first) = raw.first() else {
+            return;
+        };
+        let base = *self.offset.get_or_insert((*first).into()) as f32;
+        let sections: [Section; K] = core::array::from_fn(|i| {
+            self.design
+                .sections
+                .get(i)
+                .copied()
+                .unwrap_or(Section::IDENTITY)
+        });
+        let mut state: [[f32; 2]; K] =
+            core::array::from_fn(|i| self.state.get(i).copied().unwrap_or([0.0; 2]));
+        let [t0, t1, t2] = self.design.taps.unwrap_or([0.0, 1.0, 0.0]);
+        let [mut h1, mut h2] = self.history;
+        for (&s, o) in raw.iter().zip(out.iter_mut()) {
+            let x = s.into() as f32 - base;
+            let mut v = if ACC {
+                let v = t0 * x + t1 * h1 + t2 * h2;
+                h2 = h1;
+                h1 = x;
+                v
+            } else {
+                x
+            };
+            for (sec, st) in sections.iter().zip(state.iter_mut()) {
+                let [g1, g0] = sec.g;
+                let [e1, e0] = sec.e;
+                let [p, q] = *st;
+                let y = sec.k * (v + g1 * q + g0 * p);
+                *st = [p + q, q + v - e1 * q - e0 * p];
+                v = y;
+            }
+            *o = v + base;
+        }
+        self.history = [h1, h2];
+        for (dst, src) in self.state.iter_mut().zip(state.iter()) {
+            *dst = *src;
+        }
+    }
+}

@@ -1,0 +1,222 @@
+//! The sensor chain's inverse against the chain's analytic transfer function, and every chain
+//! the kernel must refuse.
+
+use coalshock::equaliser::{ChainFault, ChainStage};
+use coalshock::{
+    Accelerometer, BeamMode, ChainDynamics, Equaliser, EqualiserDesign, Error, Scene, SensorChain,
+};
+
+const FS: f32 = 100_000.0;
+
+fn mode(frequency_hz: f32, damping_ratio: f32, gain: f32) -> BeamMode {
+    BeamMode {
+        frequency_hz,
+        damping_ratio,
+        gain,
+    }
+}
+
+fn dynamics(modes: &[BeamMode], acc: Option<(f32, f32)>) -> ChainDynamics {
+    let mut d = ChainDynamics::RIGID;
+    for m in modes {
+        d = d.with_mode(*m).unwrap();
+    }
+    if let Some((f, z)) = acc {
+        d = d.with_accelerometer(Accelerometer {
+            frequency_hz: f,
+            damping_ratio: z,
+        });
+    }
+    d
+}
+
+/// `H(j w)` of the chain written out from its definition, in f64:
+/// `(1 + sum g s^2 / (s^2 + 2 zeta w_j s + w_j^2)) w_a^2 / (s^2 + 2 zeta_a w_a s + w_a^2)`.
+fn chain_response(modes: &[BeamMode], acc: Option<(f32, f32)>, f_hz: f64) -> (f64, f64) {
+    let w = 2.0 * std::f64::consts::PI * f_hz;
+    let mut re = 1.0;
+    let mut im = 0.0;
+    for m in modes {
+        let wj = 2.0 * std::f64::consts::PI * m.frequency_hz as f64;
+        let z = m.damping_ratio as f64;
+        // s^2 / d(s) at s = j w: -w^2 / (wj^2 - w^2 + 2 j z wj w).
+        let (dr, di) = (wj * wj - w * w, 2.0 * z * wj * w);
+        let n = dr * dr + di * di;
+        re += m.gain as f64 * (-w * w * dr) / n;
+        im += m.gain as f64 * (w * w * di) / n;
+    }
+    if let Some((fa, za)) = acc {
+        let wa = 2.0 * std::f64::consts::PI * fa as f64;
+        let (dr, di) = (wa * wa - w * w, 2.0 * za as f64 * wa * w);
+        let n = dr * dr + di * di;
+        let (ar, ai) = (wa * wa * dr / n, -wa * wa * di / n);
+        (re, im) = (re * ar - im * ai, re * ai + im * ar);
+    }
+    (re, im)
+}
+
+/// The equaliser's impulse response, `n` samples, for a unit impulse at sample 1.
+fn impulse_response(design: &EqualiserDesign, n: usize) -> Vec<f64> {
+    let scale = (1i32 << 20) as f64;
+    let mut input = vec![0i32; n + 1];
+    input[1] = 1 << 20;
+    let mut out = vec![0.0f32; n + 1];
+    let mut eq = Equaliser::new(design);
+    eq.process(&input, &mut out);
+    out[1..].iter().map(|&v| v as f64 / scale).collect()
+}
+
+/// `max |G(e^(j w T)) H(j w) e^(j w T delay) - 1|` over `f` up to `f_max` (`G` from the impulse
+/// response): how far the equalised chain is from a pure delay.
+fn worst_mismatch(modes: &[BeamMode], acc: Option<(f32, f32)>, f_max: f64) -> f64 {
+    let d = dynamics(modes, acc);
+    let design = EqualiserDesign::new::<coalshock::math::Libm>(&d, FS).unwrap();
+    let h = impulse_response(&design, 1 << 17);
+    let t = 1.0 / FS as f64;
+    let delay = design.delay_samples() as f64;
+    let mut worst = 0.0f64;
+    for k in 1..=64 {
+        let f = f_max * k as f64 / 64.0;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let (mut gr, mut gi) = (0.0, 0.0);
+        for (n, v) in h.iter().enumerate() {
+            let ph = -w * t * (n as f64 - delay);
+            gr += v * ph.cos();
+            gi += v * ph.sin();
+        }
+        let (hr, hi) = chain_response(modes, acc, f);
+        let (pr, pi) = (gr * hr - gi * hi, gr * hi + gi * hr);
+        worst = worst.max(((pr - 1.0).powi(2) + pi * pi).sqrt());
+    }
+    worst
+}
+
+#[test]
+fn beam_modes_are_inverted_across_the_pulse_band() {
+    // Three modes of a tail beam, and one stiff mode near the pulses' own band.
+    let beam = [
+        mode(180.0, 0.02, 0.1),
+        mode(650.0, 0.01, 0.05),
+        mode(2100.0, 0.02, 0.1),
+    ];
+    let worst = worst_mismatch(&beam, None, 12_500.0);
+    println!("three modes, 0..fs/8: |G H - 1| <= {worst:.2e}");
+    assert!(worst < 2e-4, "{worst}");
+    let stiff = [mode(5000.0, 0.02, 0.3)];
+    let worst = worst_mismatch(&stiff, None, 12_500.0);
+    println!("5 kHz mode, 0..fs/8: |G H - 1| <= {worst:.2e}");
+    assert!(worst < 2e-2, "{worst}");
+}
+
+#[test]
+fn accelerometer_is_inverted_within_the_stated_band_error() {
+    // Central differences: the correction `(w/w_a)^2` is off by `(w T)^2 / 12` of itself.
+    let (fa, za) = (40_000.0, 0.05);
+    for &f_max in &[5_000.0f64, 12_500.0] {
+        let worst = worst_mismatch(&[], Some((fa, za)), f_max);
+        let wt = 2.0 * std::f64::consts::PI * f_max / FS as f64;
+        let correction = (f_max / fa as f64).powi(2);
+        let bound = 1.5 * correction * wt * wt / 12.0 + 2.0 * za as f64 * f_max / fa as f64 * wt;
+        println!("accelerometer 40 kHz, 0..{f_max} Hz: {worst:.2e} (bound {bound:.2e})");
+        assert!(worst < bound.max(1e-4), "{worst} > {bound}");
+    }
+}
+
+#[test]
+fn rigid_chain_is_the_identity() {
+    let d = EqualiserDesign::new::<coalshock::math::Libm>(&ChainDynamics::RIGID, FS).unwrap();
+    assert!(d.is_identity());
+    assert_eq!(d.noise_gain(), 1.0);
+    assert_eq!(d.delay_samples(), 0);
+}
+
+#[test]
+fn noise_gain_is_the_impulse_energy() {
+    let beam = [mode(180.0, 0.02, 0.1), mode(2100.0, 0.02, 0.1)];
+    let d = dynamics(&beam, Some((40_000.0, 0.05)));
+    let design = EqualiserDesign::new::<coalshock::math::Libm>(&d, FS).unwrap();
+    let h = impulse_response(&design, 1 << 17);
+    let energy: f64 = h.iter().map(|v| v * v).sum();
+    let rel = design.noise_gain() as f64 / energy.sqrt() - 1.0;
+    println!(
+        "noise gain {} against {} from 2^17 samples",
+        design.noise_gain(),
+        energy.sqrt()
+    );
+    assert!(rel.abs() < 0.02, "{rel}");
+}
+
+fn refused(d: ChainDynamics) -> Error {
+    let sensor = SensorChain::from_plate(FS, 500.0, 100.0, 4.0, 16).with_dynamics(d);
+    let paper = Scene::<4>::paper().unwrap();
+    Scene::<4>::new(
+        *paper.plate(),
+        paper.classes(),
+        sensor,
+        *paper.settings(),
+    )
+    .unwrap_err()
+}
+
+#[test]
+fn chains_that_cannot_be_inverted_are_refused_by_stage() {
+    let stage0 = ChainStage::BeamMode(0);
+    let case = |d: ChainDynamics, stage: ChainStage, fault: ChainFault| {
+        assert_eq!(refused(d), Error::Chain { stage, fault });
+    };
+    case(
+        dynamics(&[mode(180.0, 0.0, 0.1)], None),
+        stage0,
+        ChainFault::DampingOutOfRange,
+    );
+    case(
+        dynamics(&[mode(180.0, -0.01, 0.1)], None),
+        stage0,
+        ChainFault::DampingOutOfRange,
+    );
+    case(
+        dynamics(&[mode(180.0, 0.02, 0.1), mode(60_000.0, 0.02, 0.1)], None),
+        ChainStage::BeamMode(1),
+        ChainFault::AboveNyquist,
+    );
+    case(
+        dynamics(&[mode(f32::NAN, 0.02, 0.1)], None),
+        stage0,
+        ChainFault::NonFinite,
+    );
+    case(
+        dynamics(&[mode(180.0, 0.02, -1.5)], None),
+        stage0,
+        ChainFault::NonMinimumPhase,
+    );
+    case(
+        dynamics(&[mode(-5.0, 0.02, 0.1)], None),
+        stage0,
+        ChainFault::FrequencyNotPositive,
+    );
+    // Two modes whose gains of opposite sign put a pair of zeros in the right half-plane
+    // (100 Hz, g = -0.3 and 130 Hz, g = 0.5: zeros at 52.6 +- 555.6 j rad/s).
+    case(
+        dynamics(&[mode(100.0, 0.01, -0.3), mode(130.0, 0.01, 0.5)], None),
+        ChainStage::Beam,
+        ChainFault::NonMinimumPhase,
+    );
+    case(
+        dynamics(&[], Some((40_000.0, 0.0))),
+        ChainStage::Accelerometer,
+        ChainFault::DampingOutOfRange,
+    );
+    case(
+        dynamics(&[], Some((f32::INFINITY, 0.05))),
+        ChainStage::Accelerometer,
+        ChainFault::NonFinite,
+    );
+    let full = dynamics(&[mode(100.0, 0.02, 0.1); 4], None);
+    assert_eq!(
+        full.with_mode(mode(100.0, 0.02, 0.1)).unwrap_err(),
+        Error::Chain {
+            stage: ChainStage::BeamMode(4),
+            fault: ChainFault::TooManyModes
+        }
+    );
+}
