@@ -144,6 +144,10 @@ struct Pulse {
     ring_len: usize,
     ring_sum: f32,
     top_smooth: f32,
+    /// RMS in counts of what the oldest half of the pre-trigger samples carry beyond the noise
+    /// (ringing the equaliser left, with a chain that is off from the truth), 0 when they
+    /// are within `sqrt(3)` noise RMS.
+    excess: f32,
 }
 
 impl Pulse {
@@ -175,6 +179,7 @@ impl Pulse {
         ring_len: 0,
         ring_sum: 0.0,
         top_smooth: f32::NEG_INFINITY,
+        excess: 0.0,
     };
 
     /// Adds `v` to the running mean of the last `w` samples and keeps the largest mean
@@ -541,7 +546,7 @@ impl<M: Backend> Detector<M> {
         let len = self.pre_next.wrapping_sub(self.pre_start).min(PRE_TRIGGER);
         let first = self.pre_next.wrapping_sub(len);
         let old = len / 2;
-        let mut old_sum = 0.0;
+        let (mut old_sum, mut old_sq) = (0.0, 0.0);
         for k in 0..len {
             let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
             let w = self.pre.get(i).copied().unwrap_or(0.0) - self.baseline;
@@ -553,7 +558,14 @@ impl<M: Backend> Detector<M> {
             p.smooth(w, self.smooth);
             if k < old {
                 old_sum += w;
+                old_sq += w * w;
             }
+        }
+        // Ringing before the pulse, well above the noise (16 samples of noise alone exceed
+        // 3 noise^2 in mean square with probability 1e-5).
+        let (ms, noise2) = (old_sq / old.max(1) as f32, self.noise * self.noise);
+        if old >= 4 && ms > 3.0 * noise2 {
+            p.excess = M::sqrt(ms - noise2);
         }
         // The oldest half of the pre-trigger samples: clear of the pulse's leading edge.
         p.drift = old >= 4 && (old_sum / old as f32).abs() > 0.5 * self.trigger;
@@ -733,9 +745,20 @@ impl<M: Backend> Detector<M> {
         // The peak is the mean of `smooth` samples: its noise is that much smaller.
         let noise_force = self.noise / (peak * M::sqrt(self.smooth.max(1) as f32));
         let sigma_area = self.noise * M::sqrt(n) / p.sum;
-        let sigma_ln_force = M::sqrt(noise_force * noise_force + fit_force * fit_force);
+        // Ringing seen before the pulse goes on through it, coherently: it moves the peak by
+        // its amplitude (`sqrt 2` RMS) and the area by up to that over all `n` samples.
+        let (ring_force, ring_area) = (
+            1.5 * p.excess / peak,
+            1.5 * p.excess * n / p.sum.max(f32::MIN_POSITIVE),
+        );
+        let ring2 = ring_force * ring_force + ring_area * ring_area;
+        let sigma_ln_force =
+            M::sqrt(noise_force * noise_force + fit_force * fit_force + ring_force * ring_force);
         let sigma_ln_duration = M::sqrt(
-            sigma_area * sigma_area + noise_force * noise_force + fit_duration * fit_duration,
+            sigma_area * sigma_area
+                + noise_force * noise_force
+                + fit_duration * fit_duration
+                + ring2,
         );
         // Shorter than the fit can measure, even allowing three sigma for noise.
         if duration * (1.0 + 3.0 * sigma_ln_duration) < MIN_DURATION_SAMPLES {
@@ -748,7 +771,8 @@ impl<M: Backend> Detector<M> {
             sigma_energy * sigma_energy
                 + sigma_area * sigma_area
                 + sigma_ln_force * sigma_ln_force
-                + fit_duration * fit_duration,
+                + fit_duration * fit_duration
+                + ring2,
         );
         let shape_ok = q > 0.0 && M::ln(q).abs() <= self.shape_tolerance + 4.0 * sigma_q;
         if !shape_ok || !self.symmetric_enough(peak) {

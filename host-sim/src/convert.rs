@@ -5,9 +5,8 @@
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{
-    Accelerometer, BeamMode, ChainDynamics, ContactCalibration, Material, Measurement, ParticleClass,
-    Range, Scene, SensorChain, Settings,
-    Speed,
+    Accelerometer, BeamMode, ChainDynamics, ContactCalibration, Material, Measurement,
+    ParticleClass, Range, Scene, SensorChain, Settings, Speed,
 };
 
 use crate::hertz64::Material64;

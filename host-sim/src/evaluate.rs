@@ -82,6 +82,7 @@ use crate::convert::{
     ConvertError, measurement_from_kernel, scene_to_kernel_in, separability_from_kernel,
 };
 use crate::hertz64::{HertzImpact64, effective_modulus_pa};
+use crate::mismatch::ChainMismatch;
 use crate::scene::{SceneError, SceneFile, SpeedSpec};
 use crate::stream::{StreamError, StreamOptions, generate_class, match_truth, replay_events};
 
@@ -115,6 +116,8 @@ pub struct EvalOptions {
     /// Largest distance in samples between a report's peak and an impact's peak for the two to
     /// be paired; `None`: the longest Hertz contact time of the scene in samples (at least 2).
     pub match_tolerance_samples: Option<u64>,
+    /// How far the chain the kernel is given is off from the simulated one.
+    pub chain_mismatch: ChainMismatch,
 }
 
 impl Default for EvalOptions {
@@ -128,6 +131,7 @@ impl Default for EvalOptions {
             bayes_draws_per_class: DEFAULT_BAYES_DRAWS_PER_CLASS,
             stream: StreamOptions::default(),
             match_tolerance_samples: None,
+            chain_mismatch: ChainMismatch::default(),
         }
     }
 }
@@ -406,6 +410,16 @@ pub struct EvaluateArgs {
     /// Monte Carlo draws per class of the Bayes limit.
     #[arg(long, default_value_t = DEFAULT_BAYES_DRAWS_PER_CLASS)]
     pub bayes_draws: usize,
+    /// Relative error of every chain frequency the kernel is given (0.02: 2 % high); the
+    /// simulation keeps the scene's.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub chain_frequency_error: f64,
+    /// Relative error of every chain damping ratio the kernel is given (-0.3: 30 % low).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub chain_damping_error: f64,
+    /// Relative error of every beam mode gain the kernel is given (0.2: 20 % high).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub chain_gain_error: f64,
 }
 
 impl EvaluateArgs {
@@ -415,6 +429,11 @@ impl EvaluateArgs {
             n_per_class: self.n,
             seed: self.seed,
             bayes_draws_per_class: self.bayes_draws,
+            chain_mismatch: ChainMismatch {
+                frequency: self.chain_frequency_error,
+                damping: self.chain_damping_error,
+                gain: self.chain_gain_error,
+            },
             ..EvalOptions::default()
         }
     }
@@ -548,7 +567,17 @@ fn run<const N: usize, M: Backend>(
         return Err(option_err("bayes_draws_per_class", "must be >= 1"));
     }
     opts.stream.validate()?;
-    let kernel_scene = scene_to_kernel_in::<N, M>(scene)?;
+    let m = &opts.chain_mismatch;
+    for (name, v) in [
+        ("chain_frequency_error", m.frequency),
+        ("chain_damping_error", m.damping),
+        ("chain_gain_error", m.gain),
+    ] {
+        if !(v.is_finite() && v > -1.0 && v < 1.0) {
+            return Err(option_err(name, "must be a relative error in (-1, 1)"));
+        }
+    }
+    let kernel_scene = scene_to_kernel_in::<N, M>(&m.applied_to(scene))?;
     let k = scene.classes.len();
     let models = class_models(scene);
     let plate = scene.plate.material();

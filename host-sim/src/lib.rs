@@ -11,6 +11,7 @@ pub mod impact_cli;
 pub mod integrate;
 pub mod integrator_cases;
 pub mod laws;
+pub mod mismatch;
 pub mod paper;
 pub mod scene;
 pub mod sensor;
