@@ -70,6 +70,15 @@ pub const PEAK_OMEGA: f32 = 3.290_681;
 /// is refused. The fit's duration error is 3.9 % at 3 samples per pulse and grows as `n^-2.5`.
 pub const MIN_DURATION_SAMPLES: f32 = 2.5;
 
+/// Behind a non-rigid chain, the quiet signal's mean square is tracked with this time
+/// constant (s), and a sample starts a pulse only above [`RING_SIGMAS`] times its root as well:
+/// what ringing the equaliser leaves (a chain known only to a few per cent) then neither
+/// triggers nor ends pulses.
+pub const RING_TAU_S: f32 = 1e-3;
+
+/// See [`RING_TAU_S`]; the release level is held at `RING_SIGMAS / 2` times the same root.
+pub const RING_SIGMAS: f32 = 4.0;
+
 /// Longest box filter over the top of a pulse (samples).
 pub const SMOOTH_MAX: usize = 16;
 
@@ -148,6 +157,9 @@ struct Pulse {
     /// (ringing the equaliser left, with a chain that is off from the truth), 0 when they
     /// are within `sqrt(3)` noise RMS.
     excess: f32,
+    /// The trigger and release levels in force for this pulse (counts).
+    trigger: f32,
+    release: f32,
 }
 
 impl Pulse {
@@ -180,6 +192,8 @@ impl Pulse {
         ring_sum: 0.0,
         top_smooth: f32::NEG_INFINITY,
         excess: 0.0,
+        trigger: 0.0,
+        release: 0.0,
     };
 
     /// Adds `v` to the running mean of the last `w` samples and keeps the largest mean
@@ -226,6 +240,10 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// At least one count of noise at the ADC: identical raw samples are then a sign of a
     /// stuck or clipped sensor.
     adc_noisy: bool,
+    /// Weight per sample of the quiet signal's mean square (0: not tracked, a rigid chain).
+    ring_weight: f32,
+    /// The quiet signal's mean square about the baseline (counts^2).
+    ring_ms: f32,
     adc_min: i32,
     adc_max: i32,
     dt_s: f32,
@@ -277,6 +295,12 @@ impl<M: Backend> Detector<M> {
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
             stuck_limit: if adc_noisy { s.stuck_samples } else { 0 },
             adc_noisy,
+            ring_weight: if scene.equaliser().is_identity() {
+                0.0
+            } else {
+                1.0 - M::exp(-1.0 / (RING_TAU_S * fs))
+            },
+            ring_ms: 0.0,
             adc_min: sensor.adc_min,
             adc_max: sensor.adc_max,
             dt_s: 1.0 / fs,
@@ -340,7 +364,7 @@ impl<M: Backend> Detector<M> {
         match self.state {
             State::Idle => {
                 let v = value - self.baseline;
-                if v > self.trigger || sample >= self.adc_max {
+                if (v > self.trigger && self.above_ringing(v)) || sample >= self.adc_max {
                     return self.trigger(sample, value, index, false).or(stuck);
                 }
                 // A sample far below the baseline moves it by at most the trigger level.
@@ -386,9 +410,21 @@ impl<M: Backend> Detector<M> {
     /// from the returned count in its own slices.
     #[inline(always)]
     pub fn feed_quiet_values(&mut self, samples: impl Iterator<Item = (i32, f32)>) -> usize {
+        if self.ring_weight > 0.0 {
+            self.quiet_loop::<true>(samples)
+        } else {
+            self.quiet_loop::<false>(samples)
+        }
+    }
+
+    /// The quiet loop, tracking the quiet mean square (`RING`) or not.
+    #[inline(always)]
+    fn quiet_loop<const RING: bool>(&mut self, samples: impl Iterator<Item = (i32, f32)>) -> usize {
         if self.state != State::Idle {
             return 0;
         }
+        let (weight, k2) = (self.ring_weight, RING_SIGMAS * RING_SIGMAS);
+        let mut ms = self.ring_ms;
         let (trigger, alpha, adc_max) = (self.trigger, self.alpha, self.adc_max);
         let floor = -trigger;
         // Stop before the repeat that completes a stuck run: `feed` reports it.
@@ -398,8 +434,11 @@ impl<M: Backend> Detector<M> {
         let mut n = 0usize;
         for (x, value) in samples {
             let v = value - baseline;
-            if v > trigger || x >= adc_max {
+            if (v > trigger && (!RING || v * v > k2 * ms)) || x >= adc_max {
                 break;
+            }
+            if RING {
+                ms += weight * (v * v - ms);
             }
             if x == previous {
                 if run >= limit {
@@ -418,6 +457,7 @@ impl<M: Backend> Detector<M> {
             n += 1;
         }
         self.baseline = baseline;
+        self.ring_ms = ms;
         self.previous = previous;
         self.same_run = run;
         self.pre_next = next;
@@ -519,11 +559,26 @@ impl<M: Backend> Detector<M> {
     fn resume(&mut self, sample: i32, value: f32, index: u64) -> Option<Detection> {
         self.state = State::Idle;
         let v = value - self.baseline;
-        if v > self.trigger || sample >= self.adc_max {
+        if (v > self.trigger && self.above_ringing(v)) || sample >= self.adc_max {
             return self.trigger(sample, value, index, true);
         }
         self.track_baseline(value);
         None
+    }
+
+    /// `true` when `v` (above the trigger) also stands above the ringing: always for a rigid
+    /// chain; otherwise above [`RING_SIGMAS`] times the quiet RMS, whose mean square it then
+    /// updates (`v` is kept out of it once it triggers).
+    #[inline(always)]
+    fn above_ringing(&mut self, v: f32) -> bool {
+        if self.ring_weight <= 0.0 {
+            return true;
+        }
+        if v * v > RING_SIGMAS * RING_SIGMAS * self.ring_ms {
+            return true;
+        }
+        self.ring_ms += self.ring_weight * (v * v - self.ring_ms);
+        false
     }
 
     fn track_baseline(&mut self, value: f32) {
@@ -543,6 +598,13 @@ impl<M: Backend> Detector<M> {
         after_gap: bool,
     ) -> Option<Detection> {
         let mut p = Pulse::EMPTY;
+        let ring = if self.ring_weight > 0.0 {
+            M::sqrt(self.ring_ms)
+        } else {
+            0.0
+        };
+        p.trigger = self.trigger.max(RING_SIGMAS * ring);
+        p.release = self.release.max(0.5 * RING_SIGMAS * ring);
         let len = self.pre_next.wrapping_sub(self.pre_start).min(PRE_TRIGGER);
         let first = self.pre_next.wrapping_sub(len);
         let old = len / 2;
@@ -568,7 +630,7 @@ impl<M: Backend> Detector<M> {
             p.excess = M::sqrt(ms - noise2);
         }
         // The oldest half of the pre-trigger samples: clear of the pulse's leading edge.
-        p.drift = old >= 4 && (old_sum / old as f32).abs() > 0.5 * self.trigger;
+        p.drift = old >= 4 && (old_sum / old as f32).abs() > 0.5 * p.trigger;
         p.after_gap = after_gap;
         self.pulse = p;
         self.state = State::Active;
@@ -600,7 +662,7 @@ impl<M: Backend> Detector<M> {
         } else {
             p.run = 0;
         }
-        if v > self.trigger {
+        if v > p.trigger {
             p.above_trigger = p.above_trigger.saturating_add(1);
             // Moments of the part above the trigger, in samples since the pulse's start.
             let t = p.samples as f32;
@@ -612,7 +674,7 @@ impl<M: Backend> Detector<M> {
         }
         if v > p.max {
             // A rise from a deep valley after an earlier peak is a second impact.
-            if p.max > 0.0 && second_peak(p.max, p.valley, v, self.trigger, self.noise) {
+            if p.max > 0.0 && second_peak(p.max, p.valley, v, p.trigger, self.noise) {
                 p.pileup = true;
             }
             p.max = v;
@@ -627,12 +689,12 @@ impl<M: Backend> Detector<M> {
             }
             if v < p.valley {
                 p.valley = v;
-            } else if second_peak(p.max, p.valley, v, self.trigger, self.noise) {
+            } else if second_peak(p.max, p.valley, v, p.trigger, self.noise) {
                 p.pileup = true;
             }
         }
         p.last = v;
-        if v <= self.release {
+        if v <= p.release {
             p.below_release = p.below_release.saturating_add(1);
         } else {
             p.below_release = 0;
@@ -682,7 +744,7 @@ impl<M: Backend> Detector<M> {
         let allowed = self.skew_tolerance
             + 0.6 / n
             + 25.0 * self.noise / (peak * M::sqrt(n))
-            + 4.0 * self.skewness.abs() * (self.trigger / peak).min(0.25);
+            + 4.0 * self.skewness.abs() * (self.pulse.trigger / peak).min(0.25);
         (skew - self.skewness).abs() <= allowed
     }
 
