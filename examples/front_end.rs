@@ -1,5 +1,5 @@
 //! How the embedded-hal front end plugs into the detector: the IIS3DWB driver
-//! (`coalshock::front_end::Iis3dwb`) over an `embedded_hal::spi::SpiDevice`, drained through
+//! (the `iis3dwb` crate) over an `embedded_hal::spi::SpiDevice`, drained through
 //! the `SampleSource` trait in blocks that go to `Monitor::feed_slice`.
 //!
 //! QEMU has no IIS3DWB, so the SPI device here is a small in-memory fake of one: it answers
@@ -36,13 +36,13 @@
 #[allow(dead_code)]
 mod common;
 
-use coalshock::front_end::{Axis, Config, FullScale, Iis3dwb, SampleSource};
 use coalshock::math::DefaultBackend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{Counters, Event, Monitor, Report};
 use common::{CounterLine, GAPS, Input, STORED_SAMPLES, inputs, sample};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::spi::{self, ErrorType, Operation, SpiDevice};
+use iis3dwb::{Axis, Config, FullScale, Iis3dwb, SampleSource};
 
 // ---------------------------------------------------------------------------------------------
 // The fake sensor

@@ -15,7 +15,6 @@ pub mod counters;
 pub mod detector;
 pub mod envelope;
 pub mod error;
-pub mod front_end;
 pub mod hertz;
 pub mod material;
 pub mod math;
