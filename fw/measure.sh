@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the node firmware (examples/node.rs), runs it in QEMU, measures it and checks the
+# Builds the node firmware (fw/src/bin/node.rs, package coalshock-fw), runs it in QEMU, measures it and checks the
 # budgets of fw/budgets.txt. Exit status 0 only when the firmware ran to a successful exit and
 # every budget holds.
 #
@@ -8,7 +8,7 @@
 #   - what the firmware reports on its `measure` lines: kernel RAM (size_of), stack
 #     high-water marks, instructions per quiet sample / per pulse / for building the scene;
 #   - panic sites of the kernel left in the linked image (fw/nopanic.py).
-# Also runs the front-end example (examples/front_end.rs: the IIS3DWB driver over a fake SPI
+# Also runs the front-end binary (fw/src/bin/front_end.rs: the IIS3DWB driver over a fake SPI
 # sensor serving the same stream into Monitor::feed_slice) in QEMU; it must exit with success
 # (`front_end_ok`), and its sizes are reported.
 # Also reported, not budgeted: the kernel built for thumbv6m-none-eabi (Cortex-M0/M0+) and
@@ -28,7 +28,7 @@ target_dir=$(cargo metadata --format-version 1 --no-deps \
     | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
 out=${FW_OUT:-$target_dir/fw}
 mkdir -p "$out"
-stream=examples/data/paper_stream.bin
+stream=fw/data/paper_stream.bin
 
 section() { printf '\n== %s\n' "$*"; }
 
@@ -65,8 +65,11 @@ print(f"{prefix}static_ram_bytes {ram}")
 status=0
 
 section "build: node firmware, thumbv7em-none-eabihf (Cortex-M4F)"
-cargo build --release --target thumbv7em-none-eabihf --example node
-elf="$target_dir/thumbv7em-none-eabihf/release/examples/node"
+# The firmware is its own workspace (fw/Cargo.toml) and reads fw/.cargo/config.toml, so cargo
+# runs in fw/; it shares the repository's target directory.
+fwcargo() { (cd fw && cargo "$@"); }
+fwcargo build --release --target thumbv7em-none-eabihf --bin node
+elf="$target_dir/thumbv7em-none-eabihf/release/node"
 
 section "run: QEMU netduinoplus2, -icount shift=0"
 if fw/run.sh "$elf" > "$out/node.txt"; then
@@ -93,16 +96,16 @@ cat "$out/nopanic.txt"
 sed -n 's/^nopanic: \([0-9]*\) kernel panic site(s), \([0-9]*\) elsewhere$/nopanic_kernel_sites \1\nnopanic_other_sites \2/p' \
     "$out/nopanic.txt" >> "$out/measures.txt"
 
-section "front end: examples/front_end.rs in QEMU (IIS3DWB driver over a fake SPI sensor)"
-cargo build --release --target thumbv7em-none-eabihf --example front_end
-elf_fe="$target_dir/thumbv7em-none-eabihf/release/examples/front_end"
+section "front end: fw/src/bin/front_end.rs in QEMU (IIS3DWB driver over a fake SPI sensor)"
+fwcargo build --release --target thumbv7em-none-eabihf --bin front_end
+elf_fe="$target_dir/thumbv7em-none-eabihf/release/front_end"
 if fw/run.sh "$elf_fe" > "$out/front_end.txt"; then
     echo "front_end_ok 1" >> "$out/measures.txt"
     cat "$out/front_end.txt"
 else
     rc=$?
     echo "front_end_ok 0" >> "$out/measures.txt"
-    echo "front-end example FAILED (status $rc); its output:"
+    echo "front-end binary FAILED (status $rc); its output:"
     cat "$out/front_end.txt"
 fi
 sizes "$elf_fe" "front_end_" | tee -a "$out/measures.txt"
@@ -115,8 +118,8 @@ echo "kernel builds for thumbv6m-none-eabi and thumbv8m.main-none-eabihf"
 
 if [ "${FW_SKIP_M0:-0}" != 1 ]; then
     section "Cortex-M0 (thumbv6m-none-eabi): same firmware, QEMU -cpu cortex-m0 (report only)"
-    cargo build --release --target thumbv6m-none-eabi --example node
-    elf0="$target_dir/thumbv6m-none-eabi/release/examples/node"
+    fwcargo build --release --target thumbv6m-none-eabi --bin node
+    elf0="$target_dir/thumbv6m-none-eabi/release/node"
     sizes "$elf0" "m0_" | tee -a "$out/measures.txt"
     if FW_CPU=cortex-m0 fw/run.sh "$elf0" > "$out/node-m0.txt"; then
         sed -n 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/m0_\1 \2/p' "$out/node-m0.txt" \
@@ -134,8 +137,8 @@ if [ "${FW_SKIP_M0:-0}" != 1 ]; then
         echo "Cortex-M0 run failed (report only):"
         cat "$out/node-m0.txt"
     fi
-    cargo build --release --target thumbv8m.main-none-eabihf --example node
-    sizes "$target_dir/thumbv8m.main-none-eabihf/release/examples/node" "m33_" \
+    fwcargo build --release --target thumbv8m.main-none-eabihf --bin node
+    sizes "$target_dir/thumbv8m.main-none-eabihf/release/node" "m33_" \
         | tee -a "$out/measures.txt"
 fi
 
