@@ -11,6 +11,8 @@
 # Also runs the front-end binary (fw/src/bin/front_end.rs: the IIS3DWB driver over a fake SPI
 # sensor serving the same stream into Monitor::feed_slice) in QEMU; it must exit with success
 # (`front_end_ok`), and its sizes are reported.
+# Also builds the reference node (fw/src/bin/reference_node.rs, feature `board`, profile
+# `board`) and budgets its flash and static RAM.
 # Also reported, not budgeted: the kernel built for thumbv6m-none-eabi (Cortex-M0/M0+) and
 # thumbv8m.main-none-eabihf (Cortex-M33), and the same firmware's figures on a Cortex-M0 core
 # (QEMU `-cpu cortex-m0` on the same machine: ARMv6-M instructions, no FPU).
@@ -109,6 +111,13 @@ else
     cat "$out/front_end.txt"
 fi
 sizes "$elf_fe" "front_end_" | tee -a "$out/measures.txt"
+
+section "reference node: STM32F405 + IIS3DWB (build only; no IIS3DWB in QEMU)"
+# Built with the size-optimised `board` profile (fw/Cargo.toml); its flash and static RAM are
+# budgeted (reference_node_*).
+fwcargo build --profile board --features board --bin reference_node
+sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_" \
+    | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
 
 section "other cores: the kernel alone"
 for t in thumbv6m-none-eabi thumbv8m.main-none-eabihf; do
