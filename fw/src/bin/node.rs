@@ -25,12 +25,12 @@
 //! measure <key> <value>
 //! ```
 //!
-//! Run: `cargo run --release --target thumbv7em-none-eabihf --example node` (runner
-//! `fw/run.sh`). On the host, `cargo run --example node` has host-sim read the same stream
+//! Run: `cargo run --release --bin node` in `fw/` (runner `fw/run.sh`). On the host,
+//! `cargo run -p host-sim --example node_replay` has host-sim read the same stream
 //! files and replay them through the same kernel, and prints the same
 //! `pulse`/`stuck`/`classified`/`rejected`/`counters` lines, which `fw/ci.sh` compares with the
 //! emulated node's line by line (plus a `truth` line, host only: the verdicts against the
-//! stream's truth). `examples/front_end.rs` feeds the same stream through the IIS3DWB driver.
+//! stream's truth). The `front_end` binary feeds the same stream through the IIS3DWB driver.
 #![no_std]
 #![no_main]
 
@@ -430,7 +430,7 @@ fn log_counters<M: Backend>(m: &Monitor<DEFAULT_CLASSES, M>) {
 }
 
 fn refused() -> ! {
-    // No core::fmt on the node: the host replay (`cargo run --example node`) builds the
+    // No core::fmt on the node: the host replay (`cargo run -p host-sim --example node_replay`) builds the
     // same scene and prints the error.
     defmt::println!("error scene: the paper scene was refused");
     exit(false)
