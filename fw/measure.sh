@@ -84,6 +84,30 @@ else
 fi
 sed -n 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/\1 \2/p' "$out/node.txt" >> "$out/measures.txt"
 
+section "memory map: the image is linked with memory.x (fw/build.rs; the kernel has none)"
+# The vector table at the start of FLASH and the initial stack pointer at the end of RAM, as
+# the repository's memory.x gives them.
+map=$(python3 - "$elf" "$tools/llvm-nm" memory.x <<'PY'
+import re, subprocess, sys
+elf, nm, memx = sys.argv[1:4]
+text = open(memx).read()
+def region(name):
+    m = re.search(name + r"\s*:\s*ORIGIN\s*=\s*(0x[0-9A-Fa-f]+)\s*,\s*LENGTH\s*=\s*(\d+)K", text)
+    return int(m.group(1), 16), int(m.group(2)) * 1024
+flash, ram = region("FLASH"), region("RAM")
+syms = {}
+for line in subprocess.run([nm, elf], capture_output=True, text=True, check=True).stdout.splitlines():
+    p = line.split()
+    if len(p) == 3:
+        syms[p[2]] = int(p[0], 16)
+ok = syms.get("__vector_table", -1) == flash[0] and syms.get("_stack_start", -1) == ram[0] + ram[1]
+print(f"memory_map_ok {int(ok)}  (FLASH {flash[0]:#x}+{flash[1]}, RAM {ram[0]:#x}+{ram[1]}, _stack_start {syms.get('_stack_start', 0):#x})")
+PY
+)
+echo "$map"
+echo "${map%%  *}" >> "$out/measures.txt"
+case "$map" in memory_map_ok\ 1*) ;; *) status=1 ;; esac
+
 section "size: llvm-size"
 "$tools/llvm-size" -A "$elf" | awk '$3 != 0 && $2 != 0'
 sizes "$elf" "" | tee -a "$out/measures.txt"
