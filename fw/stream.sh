@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The replayed stream of the example firmware, made by host-sim from the paper scene:
+# The replayed stream of the node firmware (fw/), made by host-sim from the paper scene:
 # fw/data/paper_stream.bin (little-endian i16 ADC codes) and
 # fw/data/paper_stream.truth.csv (the truth of every impact and fault, host-sim/FORMATS.md).
 # 40 impacts with injected faults (pile-ups, saturated impacts, dropped samples inside and
