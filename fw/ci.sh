@@ -1,18 +1,19 @@
 #!/usr/bin/env bash
 # Everything CI does for the firmware, in one script:
 #   1. fw/install.sh (targets, llvm-tools, qemu-system-arm, defmt-print; skips what is present);
-#   2. fw/stream.sh --check: host-sim regenerates the replayed stream (examples/data/
+#   2. fw/stream.sh --check: host-sim regenerates the replayed stream (fw/data/
 #      paper_stream.bin and .truth.csv) and it must equal the shipped files byte for byte;
 #   3. fw/measure.sh: builds the firmware, runs it in QEMU (Cortex-M4F), measures flash, RAM,
 #      stack and instructions, checks for kernel panic paths and enforces fw/budgets.txt;
-#      runs the front-end example (examples/front_end.rs) in QEMU; also builds for Cortex-M0
-#      and M33 and runs the M0 build (report only);
-#   4. host replay: `cargo run --example node` on the host, where host-sim reads the same
-#      stream files and replays them through the kernel, prints the verdict lines (this builds
-#      the package's host dev-dependencies, as `cargo test` does);
+#      runs the front-end binary (fw/src/bin/front_end.rs) in QEMU; also builds for Cortex-M0
+#      and M33 and runs the M0 build (report only); builds the reference node (report and
+#      budget of its sizes);
+#   4. host replay: `cargo run -p host-sim --example node_replay`, where host-sim reads the
+#      same stream files and replays them through the kernel and prints the verdict lines;
 #   5. compares the node's pulse/stuck/classified/rejected/counters lines with the host's:
 #      they must be identical, pulse by pulse (same f32 arithmetic on both);
-#   6. the front-end example on the host: same output as in QEMU.
+#   6. the front-end check on the host (`cargo run -p host-sim --example front_end`): same
+#      output as in QEMU.
 # Exit status 0 only when all of it passes. Outputs: <cargo target dir>/fw (or $FW_OUT).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -28,7 +29,7 @@ out=${FW_OUT:-$target_dir/fw}
 export FW_OUT=$out
 mkdir -p "$out"
 
-stream=examples/data/paper_stream.bin
+stream=fw/data/paper_stream.bin
 if [ ! -s "$stream" ] || [ $(( $(stat -c %s "$stream") % 2 )) != 0 ]; then
     echo "$stream missing or not a whole number of i16 samples" >&2
     exit 1
@@ -41,9 +42,9 @@ fw/stream.sh --check || status=1
 section "firmware: build, run, measure, budgets (fw/measure.sh)"
 fw/measure.sh || status=$?
 
-section "host replay (cargo run --example node)"
+section "host replay (cargo run -p host-sim --example node_replay)"
 rm -f "$out/host.txt"
-if cargo run --quiet --example node > "$out/host.txt"; then
+if cargo run --quiet -p host-sim --example node_replay > "$out/host.txt"; then
     echo "$(grep -c '^pulse ' "$out/host.txt") pulse lines on the host"
 else
     echo "host replay FAILED"
@@ -67,12 +68,12 @@ else
     status=1
 fi
 
-section "front end on the host (cargo run --example front_end)"
+section "front end on the host (cargo run -p host-sim --example front_end)"
 rm -f "$out/front_end-host.txt"
-if cargo run --quiet --example front_end > "$out/front_end-host.txt"; then
+if cargo run --quiet -p host-sim --example front_end > "$out/front_end-host.txt"; then
     cat "$out/front_end-host.txt"
 else
-    echo "front-end example FAILED on the host:"
+    echo "front-end check FAILED on the host:"
     cat "$out/front_end-host.txt"
     status=1
 fi

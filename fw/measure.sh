@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the node firmware (examples/node.rs), runs it in QEMU, measures it and checks the
+# Builds the node firmware (fw/src/bin/node.rs, package coalshock-fw), runs it in QEMU, measures it and checks the
 # budgets of fw/budgets.txt. Exit status 0 only when the firmware ran to a successful exit and
 # every budget holds.
 #
@@ -8,9 +8,11 @@
 #   - what the firmware reports on its `measure` lines: kernel RAM (size_of), stack
 #     high-water marks, instructions per quiet sample / per pulse / for building the scene;
 #   - panic sites of the kernel left in the linked image (fw/nopanic.py).
-# Also runs the front-end example (examples/front_end.rs: the IIS3DWB driver over a fake SPI
+# Also runs the front-end binary (fw/src/bin/front_end.rs: the IIS3DWB driver over a fake SPI
 # sensor serving the same stream into Monitor::feed_slice) in QEMU; it must exit with success
 # (`front_end_ok`), and its sizes are reported.
+# Also builds the reference node (fw/src/bin/reference_node.rs, feature `board`, profile
+# `board`) and budgets its flash and static RAM.
 # Also reported, not budgeted: the kernel built for thumbv6m-none-eabi (Cortex-M0/M0+) and
 # thumbv8m.main-none-eabihf (Cortex-M33), and the same firmware's figures on a Cortex-M0 core
 # (QEMU `-cpu cortex-m0` on the same machine: ARMv6-M instructions, no FPU).
@@ -28,7 +30,7 @@ target_dir=$(cargo metadata --format-version 1 --no-deps \
     | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
 out=${FW_OUT:-$target_dir/fw}
 mkdir -p "$out"
-stream=examples/data/paper_stream.bin
+stream=fw/data/paper_stream.bin
 
 section() { printf '\n== %s\n' "$*"; }
 
@@ -65,8 +67,11 @@ print(f"{prefix}static_ram_bytes {ram}")
 status=0
 
 section "build: node firmware, thumbv7em-none-eabihf (Cortex-M4F)"
-cargo build --release --target thumbv7em-none-eabihf --example node
-elf="$target_dir/thumbv7em-none-eabihf/release/examples/node"
+# The firmware is its own workspace (fw/Cargo.toml) and reads fw/.cargo/config.toml, so cargo
+# runs in fw/; it shares the repository's target directory.
+fwcargo() { (cd fw && cargo "$@"); }
+fwcargo build --release --target thumbv7em-none-eabihf --bin node
+elf="$target_dir/thumbv7em-none-eabihf/release/node"
 
 section "run: QEMU netduinoplus2, -icount shift=0"
 if fw/run.sh "$elf" > "$out/node.txt"; then
@@ -78,6 +83,30 @@ else
     status=1
 fi
 sed -n 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/\1 \2/p' "$out/node.txt" >> "$out/measures.txt"
+
+section "memory map: the image is linked with memory.x (fw/build.rs; the kernel has none)"
+# The vector table at the start of FLASH and the initial stack pointer at the end of RAM, as
+# the repository's memory.x gives them.
+map=$(python3 - "$elf" "$tools/llvm-nm" memory.x <<'PY'
+import re, subprocess, sys
+elf, nm, memx = sys.argv[1:4]
+text = open(memx).read()
+def region(name):
+    m = re.search(name + r"\s*:\s*ORIGIN\s*=\s*(0x[0-9A-Fa-f]+)\s*,\s*LENGTH\s*=\s*(\d+)K", text)
+    return int(m.group(1), 16), int(m.group(2)) * 1024
+flash, ram = region("FLASH"), region("RAM")
+syms = {}
+for line in subprocess.run([nm, elf], capture_output=True, text=True, check=True).stdout.splitlines():
+    p = line.split()
+    if len(p) == 3:
+        syms[p[2]] = int(p[0], 16)
+ok = syms.get("__vector_table", -1) == flash[0] and syms.get("_stack_start", -1) == ram[0] + ram[1]
+print(f"memory_map_ok {int(ok)}  (FLASH {flash[0]:#x}+{flash[1]}, RAM {ram[0]:#x}+{ram[1]}, _stack_start {syms.get('_stack_start', 0):#x})")
+PY
+)
+echo "$map"
+echo "${map%%  *}" >> "$out/measures.txt"
+case "$map" in memory_map_ok\ 1*) ;; *) status=1 ;; esac
 
 section "size: llvm-size"
 "$tools/llvm-size" -A "$elf" | awk '$3 != 0 && $2 != 0'
@@ -93,19 +122,26 @@ cat "$out/nopanic.txt"
 sed -n 's/^nopanic: \([0-9]*\) kernel panic site(s), \([0-9]*\) elsewhere$/nopanic_kernel_sites \1\nnopanic_other_sites \2/p' \
     "$out/nopanic.txt" >> "$out/measures.txt"
 
-section "front end: examples/front_end.rs in QEMU (IIS3DWB driver over a fake SPI sensor)"
-cargo build --release --target thumbv7em-none-eabihf --example front_end
-elf_fe="$target_dir/thumbv7em-none-eabihf/release/examples/front_end"
+section "front end: fw/src/bin/front_end.rs in QEMU (IIS3DWB driver over a fake SPI sensor)"
+fwcargo build --release --target thumbv7em-none-eabihf --bin front_end
+elf_fe="$target_dir/thumbv7em-none-eabihf/release/front_end"
 if fw/run.sh "$elf_fe" > "$out/front_end.txt"; then
     echo "front_end_ok 1" >> "$out/measures.txt"
     cat "$out/front_end.txt"
 else
     rc=$?
     echo "front_end_ok 0" >> "$out/measures.txt"
-    echo "front-end example FAILED (status $rc); its output:"
+    echo "front-end binary FAILED (status $rc); its output:"
     cat "$out/front_end.txt"
 fi
 sizes "$elf_fe" "front_end_" | tee -a "$out/measures.txt"
+
+section "reference node: STM32F405 + IIS3DWB (build only; no IIS3DWB in QEMU)"
+# Built with the size-optimised `board` profile (fw/Cargo.toml); its flash and static RAM are
+# budgeted (reference_node_*).
+fwcargo build --profile board --features board --bin reference_node
+sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_" \
+    | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
 
 section "other cores: the kernel alone"
 for t in thumbv6m-none-eabi thumbv8m.main-none-eabihf; do
@@ -115,8 +151,8 @@ echo "kernel builds for thumbv6m-none-eabi and thumbv8m.main-none-eabihf"
 
 if [ "${FW_SKIP_M0:-0}" != 1 ]; then
     section "Cortex-M0 (thumbv6m-none-eabi): same firmware, QEMU -cpu cortex-m0 (report only)"
-    cargo build --release --target thumbv6m-none-eabi --example node
-    elf0="$target_dir/thumbv6m-none-eabi/release/examples/node"
+    fwcargo build --release --target thumbv6m-none-eabi --bin node
+    elf0="$target_dir/thumbv6m-none-eabi/release/node"
     sizes "$elf0" "m0_" | tee -a "$out/measures.txt"
     if FW_CPU=cortex-m0 fw/run.sh "$elf0" > "$out/node-m0.txt"; then
         sed -n 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/m0_\1 \2/p' "$out/node-m0.txt" \
@@ -134,8 +170,8 @@ if [ "${FW_SKIP_M0:-0}" != 1 ]; then
         echo "Cortex-M0 run failed (report only):"
         cat "$out/node-m0.txt"
     fi
-    cargo build --release --target thumbv8m.main-none-eabihf --example node
-    sizes "$target_dir/thumbv8m.main-none-eabihf/release/examples/node" "m33_" \
+    fwcargo build --release --target thumbv8m.main-none-eabihf --bin node
+    sizes "$target_dir/thumbv8m.main-none-eabihf/release/node" "m33_" \
         | tee -a "$out/measures.txt"
 fi
 

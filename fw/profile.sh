@@ -5,16 +5,16 @@
 # deterministic; an independent check of the SysTick figures of fw/measure.sh, and the place
 # to look when a budget breaks. Not part of CI (a few tens of seconds for the whole run).
 #
-# Usage: fw/profile.sh [ELF] [TOP]   (default: the thumbv7em release example, top 40)
+# Usage: fw/profile.sh [ELF] [TOP]   (default: the thumbv7em release node binary, top 40)
 # Environment: FW_CPU (default cortex-m4), FW_MACHINE (default netduinoplus2).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 target_dir=$(cargo metadata --format-version 1 --no-deps \
     | python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
-elf=${1:-$target_dir/thumbv7em-none-eabihf/release/examples/node}
+elf=${1:-$target_dir/thumbv7em-none-eabihf/release/node}
 top=${2:-40}
 if [ $# -eq 0 ]; then
-    cargo build --release --target thumbv7em-none-eabihf --example node
+    (cd fw && cargo build --release --target thumbv7em-none-eabihf --bin node)
 fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
-# The replayed stream of the example firmware, made by host-sim from the paper scene:
-# examples/data/paper_stream.bin (little-endian i16 ADC codes) and
-# examples/data/paper_stream.truth.csv (the truth of every impact and fault, host-sim/FORMATS.md).
+# The replayed stream of the node firmware (fw/), made by host-sim from the paper scene:
+# fw/data/paper_stream.bin (little-endian i16 ADC codes) and
+# fw/data/paper_stream.truth.csv (the truth of every impact and fault, host-sim/FORMATS.md).
 # 40 impacts with injected faults (pile-ups, saturated impacts, dropped samples inside and
 # between pulses, EMI spikes, a stuck run, and a stream that ends inside the last pulse), so
 # the node shows rejections as well as verdicts. Same arguments, same bytes: every random draw
 # comes from the seed.
 #
-# Usage: fw/stream.sh           regenerates the shipped pair in examples/data/
+# Usage: fw/stream.sh           regenerates the shipped pair in fw/data/
 #        fw/stream.sh --check   regenerates it in a temporary directory and fails (status 1)
 #                               unless both files equal the shipped ones byte for byte
 #
@@ -16,7 +16,7 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
-stem=examples/data/paper_stream
+stem=fw/data/paper_stream
 args=(stream --scene scenes/paper.toml --n 40 --seed 4
       --pileup-share 0.08 --saturate-share 0.05 --drop-share 0.05 --drop-quiet-share 0.05
       --spike-share 0.1 --stuck-share 0.05 --end-mid-pulse)

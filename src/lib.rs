@@ -16,7 +16,6 @@ pub mod detector;
 pub mod envelope;
 pub mod equaliser;
 pub mod error;
-pub mod front_end;
 pub mod hertz;
 pub mod material;
 pub mod math;

@@ -1,12 +1,13 @@
-//! Runtime support for the coalshock example node (`examples/node.rs`).
+//! Runtime support for the coalshock firmware (`coalshock-fw`: the node binaries).
 //!
-//! The kernel and the firmware example forbid `unsafe`; the three things a bare-metal node
+//! The kernel and the firmware forbid `unsafe`; the few things a bare-metal node
 //! cannot do without it live here, each small and documented:
 //!
 //! - a `HardFault` handler that ends the emulator with a failure status instead of spinning
 //!   (the default handler loops forever, which hangs QEMU);
 //! - repainting the free stack with `PAINT` below the current stack pointer;
-//! - scanning the painted stack for the lowest word that was overwritten (high-water mark).
+//! - scanning the painted stack for the lowest word that was overwritten (high-water mark);
+//! - unmasking an interrupt in the NVIC (the reference node's FIFO watermark interrupt).
 //!
 //! With cortex-m-rt's `paint-stack` feature (enabled here) the whole stack region is painted
 //! at reset, so `lowest_touched` right before exit gives the peak use of the whole program.
@@ -89,6 +90,14 @@ mod node {
         stack_region().1.saturating_sub(lowest_touched())
     }
 
+    /// Unmasks interrupt `irq` in the NVIC (the reference node's FIFO watermark line).
+    pub fn unmask<I: cortex_m::interrupt::InterruptNumber>(irq: I) {
+        // SAFETY: unmasking can break a critical section that relies on the mask; the firmware
+        // calls this once, after the handler's shared state is in place, and shares that state
+        // only through `critical_section::Mutex`, which masks interrupts globally, not per line.
+        unsafe { cortex_m::peripheral::NVIC::unmask(irq) };
+    }
+
     #[exception]
     unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
         // No logging here: the fault may have come from the logger itself.
@@ -99,4 +108,6 @@ mod node {
 }
 
 #[cfg(target_os = "none")]
-pub use node::{PAINT, lowest_touched, paint, stack_pointer, stack_region, used_since, used_total};
+pub use node::{
+    PAINT, lowest_touched, paint, stack_pointer, stack_region, unmask, used_since, used_total,
+};

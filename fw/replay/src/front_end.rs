@@ -1,11 +1,11 @@
 //! How the embedded-hal front end plugs into the detector: the IIS3DWB driver
-//! (`coalshock::front_end::Iis3dwb`) over an `embedded_hal::spi::SpiDevice`, drained through
+//! (the `iis3dwb` crate) over an `embedded_hal::spi::SpiDevice`, drained through
 //! the `SampleSource` trait in blocks that go to `Monitor::feed_slice`.
 //!
 //! QEMU has no IIS3DWB, so the SPI device here is a small in-memory fake of one: it answers
 //! WHO_AM_I, completes the software reset, checks that the driver configured continuous FIFO
-//! mode at 26.7 kHz, and serves the replayed stream (`examples/data/paper_stream.bin`, the one
-//! `examples/node.rs` replays) as FIFO words, the stream on the Z axis, up to 200 new words per
+//! mode at 26.7 kHz, and serves the replayed stream (`fw/data/paper_stream.bin`, the one
+//! the node binary replays) as FIFO words, the stream on the Z axis, up to 200 new words per
 //! status read and never more than the FIFO's 512. Where the recording lost samples (the `gap`
 //! rows of its truth file) the fake raises the FIFO overrun flags, as the device does when
 //! words are overwritten.
@@ -29,20 +29,16 @@
 //! (the `counters` line is the front end's, before the shift is added back). Exit status 0
 //! when every event and counter agrees.
 //!
-//! Run: `cargo run --release --target thumbv7em-none-eabihf --example front_end` (QEMU, runner
-//! `fw/run.sh`), or `cargo run --example front_end` on the host; `fw/ci.sh` runs both.
-#![cfg_attr(target_os = "none", no_std, no_main)]
+//! Run in QEMU by `fw/src/bin/front_end.rs`, on the host by `host-sim/examples/front_end.rs`;
+//! `fw/ci.sh` runs both and compares their output.
 
-#[allow(dead_code)]
-mod common;
-
-use coalshock::front_end::{Axis, Config, FullScale, Iis3dwb, SampleSource};
+use crate::{GAPS, Input, STORED_SAMPLES, inputs, sample};
 use coalshock::math::DefaultBackend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{Counters, Event, Monitor, Report};
-use common::{CounterLine, GAPS, Input, STORED_SAMPLES, inputs, sample};
 use embedded_hal::delay::DelayNs;
 use embedded_hal::spi::{self, ErrorType, Operation, SpiDevice};
+use iis3dwb::{Axis, Config, FullScale, Iis3dwb, SampleSource};
 
 // ---------------------------------------------------------------------------------------------
 // The fake sensor
@@ -320,28 +316,39 @@ impl Checker<'_> {
 }
 
 /// What the two replays gave.
-struct Outcome {
-    reads: u32,
-    transactions: u32,
-    words: u32,
-    overruns: u32,
-    events: u32,
-    same: u32,
-    differ: u32,
-    shift: u64,
-    front: Counters<DEFAULT_CLASSES>,
-    counters_equal: bool,
+pub struct Outcome {
+    /// `read_samples` calls.
+    pub reads: u32,
+    /// SPI transactions the fake served.
+    pub transactions: u32,
+    /// FIFO words read out.
+    pub words: u32,
+    /// Overruns the driver reported.
+    pub overruns: u32,
+    /// Events of the plain replay.
+    pub events: u32,
+    /// Front-end events equal to the plain replay's (after the index shift).
+    pub same: u32,
+    /// Front-end events that differ, plus any missing or extra.
+    pub differ: u32,
+    /// Samples the monitor behind the driver was not told about.
+    pub shift: u64,
+    /// The front end's counters (before the shift is added back).
+    pub front: Counters<DEFAULT_CLASSES>,
+    /// The counters, shifted back, equal the plain replay's.
+    pub counters_equal: bool,
 }
 
 impl Outcome {
-    fn ok(&self) -> bool {
+    /// Every event and counter agrees.
+    pub fn ok(&self) -> bool {
         self.differ == 0 && self.same == self.events && self.counters_equal
     }
 }
 
 /// Replays the stream plainly, then through the driver and the fake sensor, and compares.
-fn run() -> Result<Outcome, &'static str> {
-    let scene = common::build_scene::<DefaultBackend>().map_err(|_| "the scene was refused")?;
+pub fn run() -> Result<Outcome, &'static str> {
+    let scene = crate::build_scene::<DefaultBackend>().map_err(|_| "the scene was refused")?;
 
     // Plain replay: one feed per sample, the recorded gap lengths.
     let mut plain = Monitor::new(scene.clone());
@@ -423,65 +430,4 @@ fn run() -> Result<Outcome, &'static str> {
         front,
         counters_equal: shifted == *plain.counters() && overruns as usize == GAPS.len(),
     })
-}
-
-#[cfg(target_os = "none")]
-mod node {
-    use super::common::target::exit;
-    use super::{CounterLine, run};
-    use coalshock_node_rt as _;
-    use cortex_m_rt::entry;
-    use defmt_semihosting as _;
-
-    #[entry]
-    fn main() -> ! {
-        let o = match run() {
-            Ok(o) => o,
-            Err(e) => {
-                defmt::println!("error {=str}", e);
-                exit(false)
-            }
-        };
-        defmt::println!(
-            "front_end reads={=u32} spi={=u32} words={=u32} overruns={=u32}",
-            o.reads,
-            o.transactions,
-            o.words,
-            o.overruns
-        );
-        defmt::println!(
-            "front_end events={=u32} same={=u32} differ={=u32} index_shift={=u64}",
-            o.events,
-            o.same,
-            o.differ,
-            o.shift
-        );
-        defmt::println!("front_end counters_equal={=u32}", o.counters_equal as u32);
-        let l = CounterLine::new(&o.front);
-        l.log();
-        exit(o.ok())
-    }
-}
-
-#[cfg(not(target_os = "none"))]
-fn main() {
-    let o = run().unwrap_or_else(|e| {
-        eprintln!("error {e}");
-        std::process::exit(1)
-    });
-    println!(
-        "front_end reads={} spi={} words={} overruns={}",
-        o.reads, o.transactions, o.words, o.overruns
-    );
-    println!(
-        "front_end events={} same={} differ={} index_shift={}",
-        o.events, o.same, o.differ, o.shift
-    );
-    println!("front_end counters_equal={}", o.counters_equal as u32);
-    let l = CounterLine::new(&o.front);
-    println!(
-        "counters samples={} pulses={} ambiguous={} out={} rejected={} stuck={} gaps={} lost={} balanced={}",
-        l.samples, l.pulses, l.ambiguous, l.out, l.rejected, l.stuck, l.gaps, l.lost, l.balanced
-    );
-    std::process::exit(if o.ok() { 0 } else { 1 });
 }

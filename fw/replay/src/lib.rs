@@ -1,25 +1,30 @@
-//! What the example firmwares share (on the node and on the host): the replayed stream, the
-//! gaps recorded in its truth file, the scene and the integer output lines.
+//! What the firmware binaries of `coalshock-fw` and their host counterparts in host-sim
+//! (`host-sim/examples/node_replay.rs`, `front_end.rs`) share: the replayed stream, the gaps
+//! recorded in its truth file, the scene, the integer output lines, and the front-end check
+//! (the IIS3DWB driver over a fake SPI sensor serving the stream, [`front_end`]).
 //!
-//! The stream is made by host-sim (`fw/stream.sh`): `data/paper_stream.bin` holds the stored
+//! The stream is made by host-sim (`fw/stream.sh`): `fw/data/paper_stream.bin` holds the stored
 //! samples (little-endian i16 ADC codes, dropped samples left out) and
-//! `data/paper_stream.truth.csv` the truth (host-sim/FORMATS.md). Of the truth the node needs
+//! `fw/data/paper_stream.truth.csv` the truth (host-sim/FORMATS.md). Of the truth the node needs
 //! only the `gap` rows (where samples were dropped and how many); they are parsed at compile
 //! time into [`GAPS`], so the CSV text takes no flash.
+#![no_std]
+
+pub mod front_end;
 
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{Counters, ParticleClass, Report, Scene, Side, Verdict};
 
 /// The replayed stream: little-endian i16 samples, dropped samples left out.
-pub static STREAM: &[u8] = include_bytes!("../data/paper_stream.bin");
+pub static STREAM: &[u8] = include_bytes!("../../data/paper_stream.bin");
 
 /// The stream's truth file (only read at compile time, see [`GAPS`]).
-const TRUTH: &[u8] = include_bytes!("../data/paper_stream.truth.csv");
+const TRUTH: &[u8] = include_bytes!("../../data/paper_stream.truth.csv");
 
 /// Samples stored in [`STREAM`].
 pub const STORED_SAMPLES: usize = STREAM_BYTES / 2;
-const STREAM_BYTES: usize = include_bytes!("../data/paper_stream.bin").len();
+const STREAM_BYTES: usize = include_bytes!("../../data/paper_stream.bin").len();
 
 /// Dropped samples of the stream: feed `STREAM[..position]`, then `Monitor::gap(lost)`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -169,11 +174,17 @@ pub fn build_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock:
 
 /// One `pulse` line, in integers so host and node print the same text.
 pub struct PulseLine<'a> {
+    /// Sample index of the report.
     pub at: u64,
+    /// `class`, `ambiguous`, `out[:sides]` or `rejected`.
     pub kind: &'static str,
+    /// Class name, nearest class, or reject reason.
     pub who: &'a str,
+    /// Posterior in parts per million (0 without one).
     pub posterior_ppm: u32,
+    /// Peak force in mN (0 without a measurement).
     pub force_mn: u32,
+    /// Contact duration in ns (0 without a measurement).
     pub duration_ns: u32,
 }
 
@@ -194,6 +205,7 @@ fn side_index(s: Side) -> usize {
 }
 
 impl<'a> PulseLine<'a> {
+    /// The line of report `r` with the scene's `classes`.
     pub fn new(r: &Report, classes: &'a [ParticleClass]) -> Self {
         let name = |i: u8| classes.get(i as usize).map_or("?", |c| c.name.as_str());
         let ppm = |p: f32| (p * 1e6 + 0.5) as u32;
@@ -233,35 +245,28 @@ impl<'a> PulseLine<'a> {
 
 /// Counter fields of the final `counters` line.
 pub struct CounterLine {
+    /// Samples fed.
     pub samples: u64,
+    /// Pulses seen.
     pub pulses: u32,
+    /// Ambiguous verdicts.
     pub ambiguous: u32,
+    /// Out-of-envelope verdicts.
     pub out: u32,
+    /// Rejected pulses, all reasons.
     pub rejected: u32,
+    /// Stuck runs.
     pub stuck: u32,
+    /// Gaps reported.
     pub gaps: u32,
+    /// Samples lost in gaps.
     pub lost: u64,
+    /// 1 when every pulse was counted once.
     pub balanced: u32,
 }
 
 impl CounterLine {
-    /// Logs the line through defmt (the node's `counters` line, compared with the host's).
-    #[cfg(target_os = "none")]
-    pub fn log(&self) {
-        defmt::println!(
-            "counters samples={=u64} pulses={=u32} ambiguous={=u32} out={=u32} rejected={=u32} stuck={=u32} gaps={=u32} lost={=u64} balanced={=u32}",
-            self.samples,
-            self.pulses,
-            self.ambiguous,
-            self.out,
-            self.rejected,
-            self.stuck,
-            self.gaps,
-            self.lost,
-            self.balanced
-        );
-    }
-
+    /// The line of counters `c`.
     pub fn new(c: &Counters<DEFAULT_CLASSES>) -> Self {
         Self {
             samples: c.samples,
@@ -274,29 +279,5 @@ impl CounterLine {
             lost: c.lost_samples,
             balanced: c.balanced() as u32,
         }
-    }
-}
-
-/// On the node: the panic handler and the semihosting exit both firmware examples use.
-#[cfg(target_os = "none")]
-pub mod target {
-    use cortex_m_semihosting::debug;
-
-    #[panic_handler]
-    fn panic(_: &core::panic::PanicInfo) -> ! {
-        // No formatting: the release build must not contain any panic path at all (fw/measure.sh
-        // checks), and a panic message would pull in core::fmt.
-        exit(false)
-    }
-
-    /// Ends the QEMU run through semihosting with success or failure.
-    pub fn exit(ok: bool) -> ! {
-        debug::exit(if ok {
-            debug::EXIT_SUCCESS
-        } else {
-            debug::EXIT_FAILURE
-        });
-        #[allow(clippy::empty_loop)]
-        loop {}
     }
 }

@@ -1,14 +1,15 @@
-//! Host tests of the front end: the IIS3DWB driver against a mocked SPI device (every byte on
-//! the bus checked) and the `SampleSource` seam.
+//! Host tests of the IIS3DWB driver against a mocked SPI device (every byte on the bus
+//! checked) and of the `SampleSource` seam. Register addresses and values are written out here
+//! as literal numbers from the datasheet (DS13114), independently of the crate's constants.
 #![cfg(not(target_os = "none"))]
 
-use coalshock::front_end::{
-    Axis, BURST_WORDS, Config, Error, FifoStatus, FullScale, Gap, IIS3DWB_FIFO_WORDS,
-    IIS3DWB_SAMPLE_BITS, IIS3DWB_SAMPLE_RATE_HZ, Iis3dwb, SampleSource, Samples,
-};
 use embedded_hal::spi::{ErrorKind, ErrorType, Operation, SpiDevice};
 use embedded_hal_mock::eh1::delay::NoopDelay;
 use embedded_hal_mock::eh1::spi::{Mock, Transaction};
+use iis3dwb::{
+    Axis, BURST_WORDS, Config, Error, FIFO_WORDS, FifoStatus, FullScale, Gap, Iis3dwb, SAMPLE_BITS,
+    SAMPLE_RATE_HZ, SampleSource, Samples,
+};
 
 // --- expected bus traffic -------------------------------------------------------------------
 
@@ -424,9 +425,9 @@ fn full_scale_sensitivities_and_counts() {
         );
     }
     assert!((FullScale::G2.counts_per_m_s2() - 1671.6).abs() < 0.1);
-    assert_eq!(IIS3DWB_SAMPLE_RATE_HZ, 26_667.0);
-    assert_eq!(IIS3DWB_SAMPLE_BITS, 16);
-    assert_eq!(IIS3DWB_FIFO_WORDS, 512);
+    assert_eq!(SAMPLE_RATE_HZ, 26_667.0);
+    assert_eq!(SAMPLE_BITS, 16);
+    assert_eq!(FIFO_WORDS, 512);
 }
 
 #[test]
@@ -515,4 +516,54 @@ fn errors_display() {
             .to_string()
             .starts_with("bus error")
     );
+}
+
+#[test]
+fn bus_errors_convert_into_comm() {
+    let e: Error<ErrorKind> = ErrorKind::Overrun.into();
+    assert_eq!(e, Error::Comm(ErrorKind::Overrun));
+    assert_eq!(
+        Error::<ErrorKind>::InvalidWatermark(512).to_string(),
+        "FIFO watermark 512 above the FIFO's 512 words"
+    );
+}
+
+// --- watermark and INT1 -----------------------------------------------------------------------
+
+#[test]
+fn watermark_writes_fifo_ctrl1_then_wtm8() {
+    // FIFO_CTRL1 (07h) = WTM[7:0]; FIFO_CTRL2 (08h) bit 0 = WTM8, STOP_ON_WTM (bit 7) clear.
+    let mut t = write(0x07, 0x80);
+    t.extend(write(0x08, 0x00));
+    t.extend(write(0x07, 0x2C));
+    t.extend(write(0x08, 0x01));
+    t.extend(write(0x07, 0xFF));
+    t.extend(write(0x08, 0x01));
+    let mut s = driver(&t, cfg(FullScale::G16, Axis::Z));
+    assert_eq!(s.set_fifo_watermark(128), Ok(()));
+    assert_eq!(s.set_fifo_watermark(300), Ok(()));
+    assert_eq!(s.set_fifo_watermark(511), Ok(()));
+    done(s);
+}
+
+#[test]
+fn a_watermark_beyond_the_fifo_is_refused_before_any_write() {
+    let mut s = driver(&[], cfg(FullScale::G16, Axis::Z));
+    assert_eq!(s.set_fifo_watermark(512), Err(Error::InvalidWatermark(512)));
+    assert_eq!(
+        s.set_fifo_watermark(u16::MAX),
+        Err(Error::InvalidWatermark(u16::MAX))
+    );
+    done(s);
+}
+
+#[test]
+fn int1_routing_writes_int1_ctrl() {
+    // INT1_CTRL (0Dh): INT1_FIFO_TH is bit 3.
+    let mut t = write(0x0D, 0x08);
+    t.extend(write(0x0D, 0x00));
+    let mut s = driver(&t, cfg(FullScale::G16, Axis::Z));
+    assert_eq!(s.route_fifo_watermark_to_int1(true), Ok(()));
+    assert_eq!(s.route_fifo_watermark_to_int1(false), Ok(()));
+    done(s);
 }

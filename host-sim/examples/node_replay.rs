@@ -1,0 +1,130 @@
+//! The host half of the node check: host-sim reads the replayed stream (`fw/data/
+//! paper_stream.bin` and `.truth.csv`) and replays it through the same kernel, printing the
+//! `pulse`/`stuck`/`classified`/`rejected`/`counters` lines the node binary of `coalshock-fw`
+//! prints, which `fw/ci.sh` compares with the emulated node's line by line, plus a `truth`
+//! line (host only: the verdicts against the stream's truth).
+//!
+//! Run: `cargo run -p host-sim --example node_replay`.
+
+use coalshock::RejectReason;
+use coalshock_replay::{CounterLine, PulseLine};
+
+/// The host replay: host-sim reads the same `.bin` + `.truth.csv` pair and replays it through
+/// the same kernel (`host_sim::stream::replay_events`: blocks through `Monitor::feed_slice`,
+/// `Monitor::gap` at every recorded gap, `Monitor::finish`), and the node's lines are printed.
+fn main() {
+    use coalshock::math::DefaultBackend;
+    use coalshock::{Event, Monitor, ParticleClass, Verdict};
+    use host_sim::stream::{ImpactFault, match_truth, read_stream, replay_events};
+
+    let fail = |what: String| -> ! {
+        eprintln!("error {what}");
+        std::process::exit(1)
+    };
+    let stem = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fw/data/paper_stream");
+    let stream = read_stream(&stem).unwrap_or_else(|e| fail(format!("stream {e}")));
+    // The node's copy of the stream (compiled in) must be what host-sim reads.
+    let stored: Vec<i16> = (0..coalshock_replay::STORED_SAMPLES)
+        .map(coalshock_replay::sample)
+        .collect();
+    if stream.samples != stored {
+        fail("stream: the samples host-sim reads differ from the node's".into());
+    }
+    let gaps: Vec<(usize, u32)> = stream.gaps.iter().map(|g| (g.position, g.lost)).collect();
+    let node_gaps: Vec<(usize, u32)> = coalshock_replay::GAPS
+        .iter()
+        .map(|g| (g.position, g.lost))
+        .collect();
+    if gaps != node_gaps {
+        fail(format!(
+            "stream: host-sim reads the gaps {gaps:?}, the node {node_gaps:?}"
+        ));
+    }
+
+    let scene = coalshock_replay::build_scene::<DefaultBackend>()
+        .unwrap_or_else(|e| fail(format!("scene {e:?}")));
+    let mut monitor = Monitor::new(scene);
+    let events = replay_events(&stream, &mut monitor);
+    // The node's own replay (one `feed` per sample, `gap` at the recorded gaps) must give the
+    // same events as host-sim's (blocks through `feed_slice`).
+    let mut node = Monitor::new(monitor.scene().clone());
+    let mut node_events: Vec<Event> = coalshock_replay::inputs()
+        .filter_map(|input| match input {
+            coalshock_replay::Input::Sample(s) => node.feed(s),
+            coalshock_replay::Input::Gap(lost) => node.gap(lost),
+        })
+        .collect();
+    node_events.extend(node.finish());
+    if node_events != events || node.counters() != monitor.counters() {
+        fail("replay: one feed per sample and feed_slice blocks give different events".into());
+    }
+    let classes: &[ParticleClass] = monitor.scene().classes();
+    for (n, e) in events.iter().enumerate() {
+        match e {
+            Event::Pulse(r) => {
+                let l = PulseLine::new(r, classes);
+                println!(
+                    "pulse {} at={} {} {} p_ppm={} F_mN={} t_ns={}",
+                    n, l.at, l.kind, l.who, l.posterior_ppm, l.force_mn, l.duration_ns
+                );
+            }
+            Event::Stuck { at_sample } => println!("stuck at={at_sample}"),
+        }
+    }
+    let c = monitor.counters();
+    for (class, count) in classes.iter().zip(c.classified.iter()) {
+        println!("classified {} {}", class.name.as_str(), count);
+    }
+    for reason in RejectReason::ALL {
+        println!("rejected {} {}", reason.name(), c.rejected_for(reason));
+    }
+    let l = CounterLine::new(c);
+    println!(
+        "counters samples={} pulses={} ambiguous={} out={} rejected={} stuck={} gaps={} lost={} balanced={}",
+        l.samples, l.pulses, l.ambiguous, l.out, l.rejected, l.stuck, l.gaps, l.lost, l.balanced
+    );
+
+    // Against the truth (not compared with the node): reports paired with impacts by peak time.
+    let reports: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Pulse(r) => Some(*r),
+            Event::Stuck { .. } => None,
+        })
+        .collect();
+    let m = match_truth(&reports, &stream.truth, 3);
+    // Clean impacts by verdict: right class, wrong class, ambiguous, out, rejected.
+    let mut clean = [0u32; 5];
+    for p in &m.pairs {
+        let (Some(r), Some(t)) = (reports.get(p.report), stream.truth.get(p.truth)) else {
+            continue;
+        };
+        if t.fault != ImpactFault::None {
+            continue;
+        }
+        let slot = match r.verdict {
+            Verdict::Class { class, .. } if class as usize == t.class => 0,
+            Verdict::Class { .. } => 1,
+            Verdict::Ambiguous { .. } => 2,
+            Verdict::OutOfEnvelope { .. } => 3,
+            Verdict::Rejected(_) => 4,
+        };
+        clean[slot] += 1;
+    }
+    println!(
+        "truth impacts={} faulty={} reports={} paired={} clean: right={} wrong={} ambiguous={} out={} rejected={}",
+        stream.truth.len(),
+        stream
+            .truth
+            .iter()
+            .filter(|t| t.fault != ImpactFault::None)
+            .count(),
+        reports.len(),
+        m.pairs.len(),
+        clean[0],
+        clean[1],
+        clean[2],
+        clean[3],
+        clean[4]
+    );
+}
