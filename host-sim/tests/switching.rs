@@ -53,7 +53,11 @@ mod reference {
         }
 
         fn rhs(&self, y: [f64; 2], p: Piece) -> [f64; 2] {
-            let f = if p.force_on { self.g(y, p.below_d) } else { 0.0 };
+            let f = if p.force_on {
+                self.g(y, p.below_d)
+            } else {
+                0.0
+            };
             [y[1], -f / self.m]
         }
 
@@ -147,11 +151,7 @@ fn sweep() -> Vec<Case> {
                 for c_max in [200.0, 500.0, 1000.0] {
                     let hertz = HertzImpact64::new(&mat, &Material64::CARBON_STEEL, r, u)
                         .expect("valid scene");
-                    out.push(Case {
-                        name,
-                        hertz,
-                        c_max,
-                    });
+                    out.push(Case { name, hertz, c_max });
                 }
             }
         }
@@ -199,10 +199,7 @@ fn adams_switches_match_a_piecewise_reference() {
             &Limits::default(),
         )
         .expect("integrates");
-        let errs = [
-            rel(s.rebound_speed_m_s, v_ref),
-            rel(s.duration_s, t_ref),
-        ];
+        let errs = [rel(s.rebound_speed_m_s, v_ref), rel(s.duration_s, t_ref)];
         if errs.iter().any(|&e| e > 1e-9) {
             wrong += 1;
             eprintln!(
@@ -217,6 +214,9 @@ fn adams_switches_match_a_piecewise_reference() {
          t_c {:.1e}",
         worst[0], worst[1]
     );
-    assert!(switching_back_on > 0, "the sweep must contain a switch back on");
+    assert!(
+        switching_back_on > 0,
+        "the sweep must contain a switch back on"
+    );
     assert_eq!(wrong, 0);
 }
