@@ -576,7 +576,8 @@ fn find_event(
     let x = seg.quartic(0);
     let poly_root =
         |p: Quartic, a: f64| earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0);
-    let end = poly_root(x, 0.0);
+    // At first contact x(0) = 0: that root is the start, not an end.
+    let end = poly_root(x, if x.0[0] == 0.0 { RESTART_THETA } else { 0.0 });
     let mut kink = None;
     if let Some(xk) = x_kink {
         let g = x.minus(xk);
