@@ -25,15 +25,20 @@
 //!
 //! # Events
 //! Each accepted step is searched on its continuous output (Dopri5's 4th-order extension,
-//! RK4's cubic Hermite) for the contact end (`x` = 0 from above), for the Adams law the
-//! kink `delta = d` (either direction, also a crossing and return inside one step), and for
-//! the damped laws the switch of the clamp at zero (sign change of
-//! [`ForceLaw::unclamped_force`]; the Adams law switches off before separation and on again
-//! just before it, when `k delta^1.5` outgrows the STEP-ramped damping). The root is found by
-//! Illinois regula falsi, the step is then re-taken exactly to the root (and must pass the
-//! error test) and, for the end and the kink, a last Newton correction lands on it, so the
-//! integration stops (contact end) or restarts (kink, clamp) there. After the run, `delta_max` is the root of `delta'` and the peak force the maximum of
-//! `F` over the continuous output, refined by golden-section search.
+//! RK4's cubic Hermite, both quartics in the step fraction `theta`) for every sign change of
+//! three switching functions: the contact end (`x`), for the Adams law the kink `delta = d`
+//! (`x - d / delta_max`) and for the damped laws the clamp at zero
+//! ([`ForceLaw::clamp_switch`], the unclamped force divided by a positive factor; the Adams law
+//! switches off before separation and on again just before it, when `k delta^1.5` outgrows
+//! the STEP-ramped damping). The search ([`crate::events`]) halves the step and drops a part
+//! only where an enclosure (Bernstein coefficients of the quartic, or
+//! [`ForceLaw::clamp_switch_bounds`] over the box of states the quartics take) proves no sign
+//! change, so a switch inside a step is not stepped over, and it takes the earliest root
+//! (Illinois regula falsi on its bracket). The step is then re-taken exactly to the root (and
+//! must pass the error test) and, for the end and the kink, a last Newton correction lands on
+//! it, so the integration stops (contact end) or restarts (kink, clamp) there. After the run,
+//! `delta_max` is the root of `delta'` and the peak force the maximum of `F` over the
+//! continuous output, refined by golden-section search.
 //!
 //! # Stiffness
 //! The damped laws with large damping (for example Adams with `c_max` a percent of `k` in SI)
@@ -43,6 +48,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::events::{Enclosure, Quartic, earliest_root, illinois};
 use crate::hertz64::{HERTZ_TC_FACTOR, positive};
 use crate::laws::ForceLaw;
 
@@ -212,9 +218,9 @@ pub struct WorkStats {
     /// Rejected steps (error too large, or a step that left the Adams kink and came back).
     pub rejected_steps: usize,
     /// Evaluations of the right-hand side, i.e. of the force law, by the integrator. Not
-    /// counted: the event search on the continuous output (three evaluations of the
-    /// unclamped force per step for the damped laws, more near a switch) and the peak-force
-    /// search after the run (about 40).
+    /// counted: the event search on the continuous output (for the damped laws one bound and
+    /// two values of the clamp's switching function per step, about 60 more near a switch)
+    /// and the peak-force search after the run (about 40).
     pub force_evals: usize,
     /// Stops and restarts at the Adams kink `delta = d`.
     pub kink_restarts: usize,
@@ -238,6 +244,12 @@ impl Segment {
         let th1 = 1.0 - theta;
         let c = |r: &[f64; 5]| r[0] + theta * (r[1] + th1 * (r[2] + theta * (r[3] + th1 * r[4])));
         [c(&self.r[0]), c(&self.r[1])]
+    }
+
+    /// Component `i` of the output as a power-basis quartic in `theta`.
+    fn quartic(&self, i: usize) -> Quartic {
+        let [r0, r1, r2, r3, r4] = self.r[i];
+        Quartic([r0, r1 + r2, r3 + r4 - r2, -(r3 + 2.0 * r4), r4])
     }
 
     fn hermite(t0: f64, h: f64, y0: [f64; 2], f0: [f64; 2], y1: [f64; 2], f1: [f64; 2]) -> Self {
@@ -509,40 +521,6 @@ fn rk4_step(rhs: &mut Rhs, t: f64, y: [f64; 2], k1: [f64; 2], h: f64) -> Trial {
     }
 }
 
-/// Root of `g` on `[a, b]` with `ga`, `gb` of opposite signs (Illinois regula falsi, with a
-/// bisection fallback), to `|b - a| <= 4 eps`.
-fn illinois(g: impl Fn(f64) -> f64, mut a: f64, mut ga: f64, mut b: f64, mut gb: f64) -> f64 {
-    if ga == 0.0 {
-        return a;
-    }
-    if gb == 0.0 {
-        return b;
-    }
-    for it in 0..200 {
-        let mut x = b - gb * (b - a) / (gb - ga);
-        let (lo, hi) = (a.min(b), a.max(b));
-        if !(x > lo && x < hi) || it % 8 == 7 {
-            x = 0.5 * (a + b);
-        }
-        let gx = g(x);
-        if gx == 0.0 {
-            return x;
-        }
-        if gx * gb < 0.0 {
-            a = b;
-            ga = gb;
-        } else {
-            ga *= 0.5;
-        }
-        b = x;
-        gb = gx;
-        if (b - a).abs() <= 4.0 * f64::EPSILON * b.abs().max(1e-300) {
-            break;
-        }
-    }
-    b
-}
-
 /// What a step contains.
 enum Event {
     /// Contact end at this theta.
@@ -555,94 +533,83 @@ enum Event {
     Retry,
 }
 
-/// Searches an accepted step for the earliest event. `clamp` is the unclamped force as a
-/// function of the scaled state, for laws that are clamped at zero; clamp switches are
-/// located only while `clamp_budget > 0`.
+/// The clamp's switching function on the scaled state: [`ForceLaw::clamp_switch`] at
+/// `delta = x delta_max`, `delta' = v u`.
+struct ClampSwitch<'a> {
+    law: &'a ForceLaw,
+    d_m: f64,
+    u_m_s: f64,
+}
+
+impl ClampSwitch<'_> {
+    fn value(&self, y: [f64; 2]) -> f64 {
+        self.law.clamp_switch(y[0] * self.d_m, y[1] * self.u_m_s)
+    }
+
+    /// No root where the law's bound over the box of `(x, v)` excludes zero.
+    fn enclosure(&self, x: (f64, f64), v: (f64, f64)) -> Enclosure {
+        let (lo, hi) = self.law.clamp_switch_bounds(
+            (x.0 * self.d_m, x.1 * self.d_m),
+            (v.0 * self.u_m_s, v.1 * self.u_m_s),
+        );
+        if lo > 0.0 || hi < 0.0 {
+            Enclosure::NoRoot
+        } else {
+            Enclosure::Unknown
+        }
+    }
+}
+
+/// Roots closer than this (in theta) to the start of a step are the restart itself.
+const RESTART_THETA: f64 = 1e-9;
+
+/// Searches an accepted step for the earliest event, on every sign change of `x` (contact
+/// end), of `x - x_d` (Adams kink) and of the clamp's switching function (while
+/// `clamp_budget > 0`), see [`crate::events`]. The clamp is searched only up to the earlier of
+/// the end and the kink.
 fn find_event(
     seg: &Segment,
-    y0: [f64; 2],
-    y1: [f64; 2],
     x_kink: Option<f64>,
-    clamp: Option<&dyn Fn([f64; 2]) -> f64>,
+    clamp: Option<&ClampSwitch>,
     clamp_budget: usize,
 ) -> Option<Event> {
-    let x_at = |th: f64| seg.eval(th)[0];
-    let v_at = |th: f64| seg.eval(th)[1];
-    // Theta of a turnaround (v changes sign) inside the step, if any.
-    let turn = if y0[1] * y1[1] < 0.0 {
-        Some(illinois(v_at, 0.0, y0[1], 1.0, y1[1]))
-    } else {
-        None
-    };
-    // Contact end: x falls to 0 (never at the very start of the contact).
-    let mut end = None;
-    if seg.t0 > 0.0 || y0[0] > 0.0 {
-        if y1[0] <= 0.0 {
-            end = Some(illinois(x_at, 0.0, y0[0], 1.0, y1[0]));
-        } else if let Some(th) = turn {
-            let xt = x_at(th);
-            if y0[1] < 0.0 && xt <= 0.0 {
-                end = Some(illinois(x_at, 0.0, y0[0], th, xt));
-            }
-        }
-    }
+    let x = seg.quartic(0);
+    let poly_root =
+        |p: Quartic, a: f64| earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0);
+    // At first contact x(0) = 0: that root is the start, not an end.
+    let end = poly_root(x, if x.0[0] == 0.0 { RESTART_THETA } else { 0.0 });
     let mut kink = None;
     if let Some(xk) = x_kink {
-        let g0 = y0[0] - xk;
-        let g1 = y1[0] - xk;
-        let s0 = if g0 != 0.0 {
-            g0.signum()
-        } else {
-            y0[1].signum()
-        };
-        if g0 == 0.0 {
+        let g = x.minus(xk);
+        if g.0[0] == 0.0 {
             // Restarted on the kink: a return across it inside this step needs a smaller step.
-            let back = g1 * s0 < 0.0 || turn.is_some_and(|th| (x_at(th) - xk) * s0 < 0.0);
-            if back {
+            if poly_root(g, RESTART_THETA).is_some() {
                 return Some(Event::Retry);
             }
-        } else if g1 * s0 <= 0.0 {
-            kink = Some(illinois(|th| x_at(th) - xk, 0.0, g0, 1.0, g1));
-        } else if let Some(th) = turn {
-            let gt = x_at(th) - xk;
-            if gt * s0 <= 0.0 {
-                kink = Some(illinois(|th| x_at(th) - xk, 0.0, g0, th, gt));
-            }
-        }
-    }
-    // Clamp switching: sign change of the unclamped force at the ends or the middle of the
-    // step, while in contact. A root at the very start (a restart on it) is ignored.
-    let mut switch = None;
-    if let Some(g) = clamp.filter(|_| clamp_budget > 0) {
-        let gt = |th: f64| {
-            let y = seg.eval(th);
-            if y[0] > 0.0 { g(y) } else { 0.0 }
-        };
-        let (g0, gm, g1) = (gt(0.0), gt(0.5), gt(1.0));
-        let root = if g0 * gm < 0.0 {
-            Some(illinois(gt, 0.0, g0, 0.5, gm))
-        } else if gm * g1 < 0.0 {
-            Some(illinois(gt, 0.5, gm, 1.0, g1))
         } else {
-            None
-        };
-        switch = root.filter(|&th| th > 1e-9);
-    }
-    let mut best: Option<Event> = None;
-    let mut best_th = f64::INFINITY;
-    for (th, ev) in [
-        (end, Event::End as fn(f64) -> Event),
-        (kink, Event::Kink),
-        (switch, Event::Clamp),
-    ] {
-        if let Some(th) = th
-            && th < best_th
-        {
-            best_th = th;
-            best = Some(ev(th));
+            kink = poly_root(g, 0.0);
         }
     }
-    best
+    let first = match (end, kink) {
+        (Some(e), Some(k)) => Some(e.min(k)),
+        (e, k) => e.or(k),
+    };
+    let hi = first.unwrap_or(1.0);
+    let switch = clamp.filter(|_| clamp_budget > 0).and_then(|sw| {
+        let v = seg.quartic(1);
+        earliest_root(
+            &|th| sw.value([x.eval(th), v.eval(th)]),
+            &|a, b| sw.enclosure(x.range(a, b), v.range(a, b)),
+            RESTART_THETA,
+            hi,
+        )
+    });
+    match (switch, first) {
+        (Some(th), _) => Some(Event::Clamp(th)),
+        (None, Some(th)) if end == Some(th) => Some(Event::End(th)),
+        (None, Some(th)) => Some(Event::Kink(th)),
+        (None, None) => None,
+    }
 }
 
 /// Integrates one contact from first contact to separation.
@@ -713,12 +680,12 @@ pub fn integrate_contact(
         evals: 0,
     };
     let x_kink = law.kink_m().map(|d| d / d_m);
-    let clamp_g = |y: [f64; 2]| law.unclamped_force(y[0] * d_m, y[1] * u);
-    let clamp_fn: Option<&dyn Fn([f64; 2]) -> f64> = if law.is_clamped() {
-        Some(&clamp_g)
-    } else {
-        None
+    let clamp_switch = ClampSwitch {
+        law: &law,
+        d_m,
+        u_m_s: u,
     };
+    let clamp = law.is_clamped().then_some(&clamp_switch);
 
     let mut work = WorkStats::default();
     let mut segments: Vec<Segment> = Vec::new();
@@ -808,10 +775,8 @@ pub fn integrate_contact(
         }
         let event = match find_event(
             &trial.seg,
-            y,
-            trial.y1,
             x_kink,
-            clamp_fn,
+            clamp,
             MAX_CLAMP_RESTARTS.saturating_sub(work.clamp_restarts),
         ) {
             Some(Event::Retry) => {

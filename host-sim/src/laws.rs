@@ -215,6 +215,64 @@ impl ForceLaw {
         }
     }
 
+    /// The clamp's switching function `S(delta, delta_dot)`: the
+    /// [`ForceLaw::unclamped_force`] `G` divided by a factor that is positive for `delta > 0`,
+    /// chosen so that `S` stays finite as `delta -> 0+` (its limit is returned for
+    /// `delta_m <= 0`). `S` and `G` change sign together; `S` is what the integrator's event
+    /// location root-finds:
+    /// * Hertz: `S = k` (N/m^n; never switches);
+    /// * Adams: `S = G / delta^e = k + STEP(delta, 0, 0, d, c_max) delta_dot / delta^e`
+    ///   (N/m^e), the STEP term `c_max delta^(2 - e) (3 - 2 delta/d) / d^2` for `delta < d`;
+    /// * restitution laws: `S = G / (K delta^n) = 1 + chi delta_dot / u0` (dimensionless);
+    /// * Tsuji: `S = G / delta^(1/4) = k delta^1.25 + c0 delta_dot` (N/m^1.25) with
+    ///   `c0 = -2 sqrt(5/6) beta sqrt(1.5 k m)` (N s/m^1.25).
+    pub fn clamp_switch(&self, delta_m: f64, delta_dot_m_s: f64) -> f64 {
+        self.clamp_switch_bounds((delta_m, delta_m), (delta_dot_m_s, delta_dot_m_s))
+            .0
+    }
+
+    /// Bounds `(lo, hi)` of [`ForceLaw::clamp_switch`] over the box `delta_m` in
+    /// `[delta.0, delta.1]` (m, negative ends taken as 0) and `delta_dot_m_s` in
+    /// `[delta_dot.0, delta_dot.1]` (m/s), by interval arithmetic: every value of `S` on the
+    /// box lies in `[lo, hi]` (up to rounding), so `lo > 0` or `hi < 0` proves that the force
+    /// does not switch there. Units as [`ForceLaw::clamp_switch`].
+    pub fn clamp_switch_bounds(&self, delta: (f64, f64), delta_dot: (f64, f64)) -> (f64, f64) {
+        let (d_lo, d_hi) = (delta.0.max(0.0), delta.1.max(delta.0).max(0.0));
+        match *self {
+            Self::Hertz { stiffness, .. } => (stiffness, stiffness),
+            Self::AdamsImpact {
+                stiffness,
+                exponent,
+                c_max_n_s_m,
+                d_m,
+            } => {
+                let w = adams_weight_bounds(d_lo, d_hi, exponent, c_max_n_s_m, d_m);
+                let p = mul_bounds(w, delta_dot);
+                (stiffness + p.0, stiffness + p.1)
+            }
+            Self::Restitution {
+                chi,
+                impact_speed_m_s,
+                ..
+            } => (
+                1.0 + chi * delta_dot.0 / impact_speed_m_s,
+                1.0 + chi * delta_dot.1 / impact_speed_m_s,
+            ),
+            Self::Tsuji {
+                stiffness,
+                mass_kg,
+                beta,
+                ..
+            } => {
+                let c0 = -2.0 * (5.0_f64 / 6.0).sqrt() * beta * (1.5 * stiffness * mass_kg).sqrt();
+                (
+                    stiffness * d_lo.powf(1.25) + c0 * delta_dot.0,
+                    stiffness * d_hi.powf(1.25) + c0 * delta_dot.1,
+                )
+            }
+        }
+    }
+
     /// Whether the law is clamped at zero, i.e. can switch its force off while `delta > 0`
     /// (every law but undamped Hertz).
     pub fn is_clamped(&self) -> bool {
@@ -445,6 +503,41 @@ impl ForceLaw {
         }
         Ok(make(best.exp()))
     }
+}
+
+/// Bounds of the Adams STEP weight `w(delta) = STEP(delta, 0, 0, d, c) / delta^e`
+/// (N s/m^(1+e)) over `delta` in `[lo, hi]` (m, `0 <= lo <= hi`): `c delta^(2 - e)
+/// (3 - 2 delta/d) / d^2` below `d` (a product of two non-negative monotone factors),
+/// `c delta^-e` above it (decreasing); the hull where the interval straddles `d`.
+fn adams_weight_bounds(lo: f64, hi: f64, e: f64, c: f64, d: f64) -> (f64, f64) {
+    let mut out = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut join = |b: (f64, f64)| out = (out.0.min(b.0), out.1.max(b.1));
+    if lo < d {
+        let top = hi.min(d);
+        let pow = |x: f64| if e == 1.5 { x.sqrt() } else { x.powf(2.0 - e) };
+        let (pa, pb) = (pow(lo), pow(top));
+        let scale = c / (d * d);
+        join((
+            scale * pa.min(pb) * (3.0 - 2.0 * top / d),
+            scale * pa.max(pb) * (3.0 - 2.0 * lo / d),
+        ));
+    }
+    if hi >= d {
+        let bottom = lo.max(d);
+        join((c / pow_e(hi, e), c / pow_e(bottom, e)));
+    }
+    out
+}
+
+/// Interval product `[a.0, a.1] * [b.0, b.1]` (the whole line if a product is undefined).
+fn mul_bounds(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    let p = [a.0 * b.0, a.0 * b.1, a.1 * b.0, a.1 * b.1];
+    if p.iter().any(|x| x.is_nan()) {
+        return (f64::NEG_INFINITY, f64::INFINITY);
+    }
+    let lo = p.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (lo, hi)
 }
 
 fn non_negative(name: &str, value: f64) -> Result<(), SimError> {

@@ -5,6 +5,7 @@ pub mod bayes;
 pub mod calibrate;
 pub mod convert;
 pub mod evaluate;
+mod events;
 pub mod hertz64;
 pub mod impact;
 pub mod impact_cli;

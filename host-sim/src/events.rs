@@ -1,0 +1,211 @@
+//! Root location on a step's continuous output: the earliest sign change of a switching
+//! function inside a step, found so that none is stepped over.
+//!
+//! A step's continuous output is a quartic in `theta` in [0, 1] for each component of the
+//! scaled state ([`Quartic`]). [`earliest_root`] halves `[a, b]` and drops a half only when an
+//! enclosure proves that the function has no sign change there ([`Enclosure`]): for a
+//! polynomial switching function (contact end `x`, Adams kink `x - x_d`) its Bernstein
+//! coefficients on the half (the quartic lies in their convex hull; with non-zero end
+//! coefficients, at most one sign variation means at most one root inside, by Descartes' rule
+//! for the Bernstein basis, so no further halving is needed), for the clamp a bound of the
+//! law's switching function over the box of states that the quartics take on the half. Left
+//! halves are searched first, so the first root found is the earliest. A half narrower than
+//! `2^-MAX_DEPTH` of the interval is not split further; its bracket, if any, is refined by
+//! Illinois regula falsi.
+
+/// Halvings of the searched interval before a bracket is refined as it is.
+const MAX_DEPTH: u32 = 30;
+
+/// A quartic `c0 + c1 theta + c2 theta^2 + c3 theta^3 + c4 theta^4` (power basis).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Quartic(pub [f64; 5]);
+
+impl Quartic {
+    /// Value at `theta` (Horner).
+    pub fn eval(&self, theta: f64) -> f64 {
+        let c = &self.0;
+        c[0] + theta * (c[1] + theta * (c[2] + theta * (c[3] + theta * c[4])))
+    }
+
+    /// The quartic minus the constant `x`.
+    pub fn minus(&self, x: f64) -> Self {
+        let mut c = self.0;
+        c[0] -= x;
+        Self(c)
+    }
+
+    /// Bernstein coefficients of the quartic restricted to `[a, b]`: Taylor shift to `a`
+    /// (`q_j = p^(j)(a) (b - a)^j / j!`), then `b_i = sum_j C(i, j) / C(4, j) q_j`.
+    pub fn bernstein(&self, a: f64, b: f64) -> [f64; 5] {
+        let mut q = self.0;
+        for i in 0..4 {
+            for j in (i..4).rev() {
+                q[j] += a * q[j + 1];
+            }
+        }
+        let w = b - a;
+        let mut wj = w;
+        for qj in q.iter_mut().skip(1) {
+            *qj *= wj;
+            wj *= w;
+        }
+        [
+            q[0],
+            q[0] + 0.25 * q[1],
+            q[0] + 0.5 * q[1] + q[2] / 6.0,
+            q[0] + 0.75 * q[1] + 0.5 * q[2] + 0.25 * q[3],
+            q[0] + q[1] + q[2] + q[3] + q[4],
+        ]
+    }
+
+    /// Bounds `(lo, hi)` of the quartic on `[a, b]` (the hull of its Bernstein coefficients).
+    pub fn range(&self, a: f64, b: f64) -> (f64, f64) {
+        let bs = self.bernstein(a, b);
+        bs.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            })
+    }
+
+    /// What the Bernstein coefficients on `[a, b]` say about the roots there.
+    pub fn enclosure(&self, a: f64, b: f64) -> Enclosure {
+        let bs = self.bernstein(a, b);
+        if bs.iter().all(|&x| x > 0.0) || bs.iter().all(|&x| x < 0.0) {
+            return Enclosure::NoRoot;
+        }
+        if bs[0] == 0.0 || bs[4] == 0.0 {
+            // A root at an end: the count below is for the open interval only.
+            return Enclosure::Unknown;
+        }
+        let mut last = 0.0_f64;
+        let mut variations = 0;
+        for &x in bs.iter().filter(|&&x| x != 0.0) {
+            variations += usize::from(last * x < 0.0);
+            last = x;
+        }
+        if variations <= 1 {
+            Enclosure::AtMostOne
+        } else {
+            Enclosure::Unknown
+        }
+    }
+}
+
+/// What is known about the roots of a switching function on an interval.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Enclosure {
+    /// No root (the function keeps one strict sign).
+    NoRoot,
+    /// At most one root inside (a sign change between the ends is that root).
+    AtMostOne,
+    /// Nothing proven.
+    Unknown,
+}
+
+/// The earliest `theta` in `(a, b]` where `g` changes sign, from `g(a) != 0` to 0 or the
+/// opposite sign; `None` if `g` keeps its sign (or `g(a) == 0`). `enclose(lo, hi)` must tell
+/// the truth about `g` on `[lo, hi]` (see [`Enclosure`]).
+pub(crate) fn earliest_root(
+    g: &dyn Fn(f64) -> f64,
+    enclose: &dyn Fn(f64, f64) -> Enclosure,
+    a: f64,
+    b: f64,
+) -> Option<f64> {
+    if b <= a || b.is_nan() {
+        return None;
+    }
+    search(g, enclose, (a, g(a)), (b, g(b)), MAX_DEPTH)
+}
+
+fn search(
+    g: &dyn Fn(f64) -> f64,
+    enclose: &dyn Fn(f64, f64) -> Enclosure,
+    (a, ga): (f64, f64),
+    (b, gb): (f64, f64),
+    depth: u32,
+) -> Option<f64> {
+    let crossing = ga != 0.0 && ga * gb <= 0.0;
+    match enclose(a, b) {
+        Enclosure::NoRoot => None,
+        Enclosure::AtMostOne => crossing.then(|| illinois(g, a, ga, b, gb)),
+        Enclosure::Unknown if depth == 0 => crossing.then(|| illinois(g, a, ga, b, gb)),
+        Enclosure::Unknown => {
+            let m = 0.5 * (a + b);
+            let gm = g(m);
+            search(g, enclose, (a, ga), (m, gm), depth - 1)
+                .or_else(|| search(g, enclose, (m, gm), (b, gb), depth - 1))
+        }
+    }
+}
+
+/// Root of `g` on `[a, b]` with `ga`, `gb` of opposite signs (Illinois regula falsi, with a
+/// bisection fallback), to `|b - a| <= 4 eps`.
+pub(crate) fn illinois(
+    g: impl Fn(f64) -> f64,
+    mut a: f64,
+    mut ga: f64,
+    mut b: f64,
+    mut gb: f64,
+) -> f64 {
+    if ga == 0.0 {
+        return a;
+    }
+    if gb == 0.0 {
+        return b;
+    }
+    for it in 0..200 {
+        let mut x = b - gb * (b - a) / (gb - ga);
+        let (lo, hi) = (a.min(b), a.max(b));
+        if !(x > lo && x < hi) || it % 8 == 7 {
+            x = 0.5 * (a + b);
+        }
+        let gx = g(x);
+        if gx == 0.0 {
+            return x;
+        }
+        if gx * gb < 0.0 {
+            a = b;
+            ga = gb;
+        } else {
+            ga *= 0.5;
+        }
+        b = x;
+        gb = gx;
+        if (b - a).abs() <= 4.0 * f64::EPSILON * b.abs().max(1e-300) {
+            break;
+        }
+    }
+    b
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `(theta - 0.2)(theta - 0.25)(theta - 0.3)(theta - 2)`: three roots close together, one
+    /// of them on a halving point; the earliest is found, also when the ends of the searched
+    /// interval have the same sign.
+    #[test]
+    fn finds_the_earliest_of_close_roots() {
+        let roots = [0.2, 0.25, 0.3, 2.0];
+        let mut c = [1.0, 0.0, 0.0, 0.0, 0.0];
+        for r in roots {
+            let mut n = [0.0; 5];
+            for i in 0..5 {
+                n[i] = -r * c[i] + if i > 0 { c[i - 1] } else { 0.0 };
+            }
+            c = n;
+        }
+        let p = Quartic(c);
+        let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.0, 1.0);
+        assert!((th.expect("a root") - 0.2).abs() < 1e-14);
+        // A pair of roots inside with no sign change between the ends is not stepped over.
+        let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.22, 1.0);
+        assert!((th.expect("a root") - 0.25).abs() < 1e-14);
+        let (lo, hi) = p.range(0.0, 1.0);
+        for i in 0..=100 {
+            let v = p.eval(f64::from(i) / 100.0);
+            assert!(lo <= v && v <= hi);
+        }
+    }
+}
