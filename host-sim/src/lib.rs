@@ -6,6 +6,7 @@ pub mod calibrate;
 pub mod convert;
 pub mod evaluate;
 pub mod hertz64;
+pub mod identify;
 pub mod impact;
 pub mod impact_cli;
 pub mod integrate;
