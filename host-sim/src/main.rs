@@ -340,4 +340,28 @@ mod tests {
         assert_eq!(o.pulse_model, PulseModel::Integrator);
         o.validate().expect("valid");
     }
+
+    #[test]
+    fn identify_flags_map_onto_the_options() {
+        let cli = Cli::try_parse_from([
+            "host-sim",
+            "identify",
+            "--stream",
+            "a.bin",
+            "--sample-rate",
+            "26667",
+            "--modes",
+            "2",
+            "--accelerometer",
+        ])
+        .expect("parses");
+        let Command::Identify(args) = cli.command else {
+            panic!("not the identify command");
+        };
+        let o = args.options();
+        assert_eq!(o.sample_rate_hz, 26667.0);
+        assert_eq!(o.modes, Some(2));
+        assert!(o.accelerometer);
+        assert_eq!(o.noise_rms_counts, None);
+    }
 }

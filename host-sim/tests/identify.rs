@@ -102,6 +102,24 @@ fn modes_and_a_40_khz_accelerometer() {
 }
 
 #[test]
+fn no_resonance_is_reported_when_the_chain_has_none() {
+    let mut scene = SceneFile::paper();
+    scene.sensor.beam_modes = tail_beam();
+    let stream = generate(&scene, 40, 14, &StreamOptions::default()).expect("stream");
+    let opts = IdentifyOptions {
+        sample_rate_hz: scene.sensor.sample_rate_hz,
+        modes: Some(2),
+        accelerometer: true,
+        noise_rms_counts: Some(4.0),
+    };
+    let id = identify(&stream.samples, &opts).expect("identified");
+    assert!(id.accelerometer.is_none(), "{:?}", id.accelerometer);
+    assert!(id.to_toml().contains("no resonance rings"));
+    // The two that ring strongest.
+    assert_eq!(id.modes.len(), 2);
+}
+
+#[test]
 fn too_few_pulses_and_bad_options_are_errors() {
     let quiet = vec![0i16; 10_000];
     let opts = IdentifyOptions {
