@@ -7,6 +7,7 @@ pub mod convert;
 pub mod evaluate;
 mod events;
 pub mod hertz64;
+pub mod identify;
 pub mod impact;
 pub mod impact_cli;
 pub mod integrate;

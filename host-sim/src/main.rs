@@ -4,7 +4,9 @@
 //! - `host-sim impact`: one impact, or a batch of impacts from a CSV file;
 //! - `host-sim stream`: a labelled sample stream (`.bin` + `.truth.csv`, see `FORMATS.md`);
 //! - `host-sim evaluate`: the kernel scored on a scene against the Bayes limit (see
-//!   `host_sim::evaluate`, JSON fields in `FORMATS.md`).
+//!   `host_sim::evaluate`, JSON fields in `FORMATS.md`);
+//! - `host-sim identify`: the beam's modes and the accelerometer's resonance estimated from a
+//!   recorded stream (see `host_sim::identify`), printed as a `[sensor]` table.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -46,6 +48,61 @@ enum Command {
     /// Measure what each knob buys and costs (math backend, separability grid, integrator,
     /// sample rate): a markdown table, CSV files and SVG Pareto plots.
     Tradeoff(host_sim::tradeoff::TradeoffArgs),
+    /// Estimate the tail beam's modes (and the accelerometer's resonance) from a recorded
+    /// stream of impacts; prints the scene's [sensor] table.
+    Identify(IdentifyArgs),
+}
+
+/// Flags of `host-sim identify`.
+#[derive(Debug, Clone, Args)]
+struct IdentifyArgs {
+    /// Recorded stream: little-endian i16 samples (OUT.bin of `host-sim stream`).
+    #[arg(long)]
+    stream: PathBuf,
+    /// Sample rate of the stream in Hz.
+    #[arg(long)]
+    sample_rate: f64,
+    /// Number of beam modes to report (default: as many as ring above the noise).
+    #[arg(long)]
+    modes: Option<usize>,
+    /// Also estimate the accelerometer's resonance.
+    #[arg(long)]
+    accelerometer: bool,
+    /// Noise RMS in counts (default: estimated from the stream).
+    #[arg(long)]
+    noise_rms: Option<f64>,
+}
+
+impl IdentifyArgs {
+    fn options(&self) -> host_sim::identify::IdentifyOptions {
+        host_sim::identify::IdentifyOptions {
+            sample_rate_hz: self.sample_rate,
+            modes: self.modes,
+            accelerometer: self.accelerometer,
+            noise_rms_counts: self.noise_rms,
+        }
+    }
+}
+
+/// `host-sim identify`: reads the samples, prints the `[sensor]` table.
+fn run_identify(args: &IdentifyArgs) -> Result<()> {
+    let bytes = std::fs::read(&args.stream)
+        .with_context(|| format!("reading the stream {}", args.stream.display()))?;
+    if bytes.len() % 2 != 0 {
+        anyhow::bail!(
+            "--stream {}: {} bytes is not a whole number of i16 samples",
+            args.stream.display(),
+            bytes.len()
+        );
+    }
+    let samples: Vec<i16> = bytes
+        .chunks_exact(2)
+        .map(|b| i16::from_le_bytes([b[0], b[1]]))
+        .collect();
+    let id = host_sim::identify::identify(&samples, &args.options())
+        .with_context(|| format!("identifying the chain from {}", args.stream.display()))?;
+    print!("{}", id.to_toml());
+    Ok(())
 }
 
 /// How each impact's force pulse is made.
@@ -207,6 +264,7 @@ fn main() -> Result<()> {
         Command::Stream(args) => run_stream(args),
         Command::Evaluate(args) => run_evaluate(args),
         Command::Tradeoff(args) => host_sim::tradeoff::run(args),
+        Command::Identify(args) => run_identify(args),
     }
 }
 
@@ -281,5 +339,29 @@ mod tests {
         assert_eq!(o.faults.drift_counts_per_s, -20.0);
         assert_eq!(o.pulse_model, PulseModel::Integrator);
         o.validate().expect("valid");
+    }
+
+    #[test]
+    fn identify_flags_map_onto_the_options() {
+        let cli = Cli::try_parse_from([
+            "host-sim",
+            "identify",
+            "--stream",
+            "a.bin",
+            "--sample-rate",
+            "26667",
+            "--modes",
+            "2",
+            "--accelerometer",
+        ])
+        .expect("parses");
+        let Command::Identify(args) = cli.command else {
+            panic!("not the identify command");
+        };
+        let o = args.options();
+        assert_eq!(o.sample_rate_hz, 26667.0);
+        assert_eq!(o.modes, Some(2));
+        assert!(o.accelerometer);
+        assert_eq!(o.noise_rms_counts, None);
     }
 }

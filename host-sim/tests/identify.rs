@@ -1,0 +1,139 @@
+//! `identify` on host-sim's own streams (paper scene, 4 counts RMS noise, integrated Hertz
+//! pulses): a tail beam with three modes, alone at 100 kS/s and under an accelerometer
+//! resonance at 40 kHz. Asserted: frequency within 1 %, damping within 20 %, gain within 10 %
+//! of the spec; the resonance's frequency within 1 % and damping within 20 %. The measured
+//! errors are printed (`cargo test -p host-sim --test identify -- --nocapture`).
+
+use host_sim::identify::{IdentifyOptions, identify};
+use host_sim::scene::{BeamMode, Resonance, SceneFile};
+use host_sim::stream::{StreamOptions, generate};
+
+fn tail_beam() -> Vec<BeamMode> {
+    [
+        (180.0, 0.02, 0.1),
+        (650.0, 0.01, 0.05),
+        (2100.0, 0.02, 0.03),
+    ]
+    .into_iter()
+    .map(|(frequency_hz, damping_ratio, gain)| BeamMode {
+        frequency_hz,
+        damping_ratio,
+        gain,
+    })
+    .collect()
+}
+
+/// Identifies a stream of `scene` and checks every mode (and the resonance if present).
+fn check(scene: &SceneFile, impacts: usize, seed: u64, modes: Option<usize>) {
+    let stream = generate(scene, impacts, seed, &StreamOptions::default()).expect("stream");
+    let spec = &scene.sensor;
+    let opts = IdentifyOptions {
+        sample_rate_hz: spec.sample_rate_hz,
+        modes,
+        accelerometer: spec.accelerometer.is_some(),
+        noise_rms_counts: None,
+    };
+    let id = identify(&stream.samples, &opts).expect("identified");
+    println!("{}", id.to_toml());
+    assert!(
+        (id.noise_rms_counts / spec.noise_rms_counts - 1.0).abs() < 0.1,
+        "noise {} counts",
+        id.noise_rms_counts
+    );
+    assert_eq!(id.modes.len(), spec.beam_modes.len(), "{id:?}");
+    println!("mode      | frequency | damping  | gain");
+    for (m, t) in id.modes.iter().zip(&spec.beam_modes) {
+        let ef = m.frequency_hz.value / t.frequency_hz - 1.0;
+        let ez = m.damping_ratio.value / t.damping_ratio - 1.0;
+        let eg = m.gain.value / t.gain - 1.0;
+        println!(
+            "{:7} Hz | {:+.4} % | {:+.3} % | {:+.3} %",
+            t.frequency_hz,
+            100.0 * ef,
+            100.0 * ez,
+            100.0 * eg
+        );
+        assert!(ef.abs() < 0.01, "frequency of {t:?}: {m:?}");
+        assert!(ez.abs() < 0.2, "damping of {t:?}: {m:?}");
+        assert!(eg.abs() < 0.1, "gain of {t:?}: {m:?}");
+    }
+    match (&spec.accelerometer, &id.accelerometer) {
+        (None, None) => {}
+        (Some(t), Some(a)) => {
+            let ef = a.frequency_hz.value / t.frequency_hz - 1.0;
+            let ez = a.damping_ratio.value / t.damping_ratio - 1.0;
+            println!(
+                "accel {} Hz | {:+.4} % | {:+.3} % | ({} rings)",
+                t.frequency_hz,
+                100.0 * ef,
+                100.0 * ez,
+                a.pulses
+            );
+            assert!(ef.abs() < 0.01, "accelerometer frequency: {a:?}");
+            assert!(ez.abs() < 0.2, "accelerometer damping: {a:?}");
+        }
+        (t, a) => panic!("accelerometer: spec {t:?}, identified {a:?}"),
+    }
+}
+
+#[test]
+fn tail_beam_modes_at_the_paper_scene_noise() {
+    let mut scene = SceneFile::paper();
+    scene.sensor.beam_modes = tail_beam();
+    check(&scene, 60, 11, None);
+}
+
+#[test]
+fn tail_beam_modes_given_their_number() {
+    let mut scene = SceneFile::paper();
+    scene.sensor.beam_modes = tail_beam();
+    check(&scene, 60, 12, Some(3));
+}
+
+#[test]
+fn modes_and_a_40_khz_accelerometer() {
+    let mut scene = SceneFile::paper();
+    scene.sensor.beam_modes = tail_beam();
+    scene.sensor.accelerometer = Some(Resonance {
+        frequency_hz: 40_000.0,
+        damping_ratio: 0.05,
+    });
+    check(&scene, 60, 13, None);
+}
+
+#[test]
+fn no_resonance_is_reported_when_the_chain_has_none() {
+    let mut scene = SceneFile::paper();
+    scene.sensor.beam_modes = tail_beam();
+    let stream = generate(&scene, 40, 14, &StreamOptions::default()).expect("stream");
+    let opts = IdentifyOptions {
+        sample_rate_hz: scene.sensor.sample_rate_hz,
+        modes: Some(2),
+        accelerometer: true,
+        noise_rms_counts: Some(4.0),
+    };
+    let id = identify(&stream.samples, &opts).expect("identified");
+    assert!(id.accelerometer.is_none(), "{:?}", id.accelerometer);
+    assert!(id.to_toml().contains("no resonance rings"));
+    // The two that ring strongest.
+    assert_eq!(id.modes.len(), 2);
+}
+
+#[test]
+fn too_few_pulses_and_bad_options_are_errors() {
+    let quiet = vec![0i16; 10_000];
+    let opts = IdentifyOptions {
+        sample_rate_hz: 100_000.0,
+        modes: None,
+        accelerometer: false,
+        noise_rms_counts: None,
+    };
+    let e = identify(&quiet, &opts).expect_err("no pulses");
+    assert!(e.to_string().contains("pulses"), "{e}");
+    let bad = IdentifyOptions {
+        sample_rate_hz: -1.0,
+        ..opts
+    };
+    let e = identify(&quiet, &bad).expect_err("bad rate");
+    assert!(e.to_string().starts_with("--sample-rate"), "{e}");
+}
