@@ -370,7 +370,7 @@ fn solve5(mut m: [[f32; 6]; 5]) -> Option<[f32; 5]> {
         m.swap(col, pivot);
         let p_row = *m.get(col)?;
         let p = *p_row.get(col)?;
-        if !(p.abs() > 1e-20) {
+        if p.abs() <= 1e-20 || p.is_nan() {
             return None;
         }
         for (i, row) in m.iter_mut().enumerate() {
