@@ -366,6 +366,11 @@ pub struct Evaluation {
     pub measured_vs_oracle: Paired,
     /// Noise and bias of the measured features.
     pub noise: NoiseEstimate,
+    /// White-noise gain of the kernel's equaliser (1 for a rigid chain): the ADC noise RMS
+    /// times it is the noise of the reconstructed force, in counts.
+    pub equaliser_noise_gain: f64,
+    /// The relative errors of the chain the kernel was given (all 0: the true chain).
+    pub chain_mismatch: [f64; 3],
     /// Samples fed to the kernel (including the quiet stretches).
     pub samples_fed: u64,
     /// Pulse reports of the kernel (paired or not).
@@ -828,6 +833,8 @@ fn run<const N: usize, M: Backend>(
         rejected_share: column_share(col_rej),
         missed_share: column_share(col_miss),
         spurious_reports: spurious,
+        equaliser_noise_gain: kernel_scene.equaliser().noise_gain() as f64,
+        chain_mismatch: [m.frequency, m.damping, m.gain],
         bayes_accuracy: bayes.accuracy,
         bayes_std_error: bayes.std_error,
         bayes_draws: bayes.n,
@@ -1062,9 +1069,16 @@ impl Evaluation {
             "kernel classifier (kernel - Bayes on measured)",
             &self.kernel_vs_bayes_on_measured,
         );
+        let [mf, md, mg] = self.chain_mismatch;
         let _ = writeln!(
             s,
-            "\n{} samples fed, {} pulses reported, {:.4} s in the kernel ({:.1} ns per sample)",
+            "\nequaliser noise gain {:.4}; chain given to the kernel off by frequency {:+}, \
+             damping {:+}, gain {:+} (relative)",
+            self.equaliser_noise_gain, mf, md, mg
+        );
+        let _ = writeln!(
+            s,
+            "{} samples fed, {} pulses reported, {:.4} s in the kernel ({:.1} ns per sample)",
             self.samples_fed, self.pulses_detected, self.kernel_seconds, self.kernel_ns_per_sample
         );
         s
