@@ -378,7 +378,8 @@ fn solve5(mut m: [[f32; 6]; 5]) -> Option<[f32; 5]> {
             *r = p_row;
         }
         let p = *p_row.get(col)?;
-        if !(p.abs() > 1e-20) {
+        // Also refuses a NaN pivot.
+        if p.abs().partial_cmp(&1e-20) != Some(core::cmp::Ordering::Greater) {
             return None;
         }
         for (i, row) in m.iter_mut().enumerate() {
