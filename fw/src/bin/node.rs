@@ -10,8 +10,15 @@
 //!    built, then every `feed` is timed with SysTick (deterministic under QEMU's
 //!    `-icount shift=0`: one instruction per virtual nanosecond, calibrated against a counted
 //!    loop) and the stack below the caller is painted and scanned; no logging;
+//!    Each pass also times quiet blocks through `Monitor::feed_slice` on the paper scene and
+//!    on the chain scene of `scenes/piezo_chain.toml` (three beam modes and an accelerometer
+//!    stage, equalised before detection);
 //! 2. a logging pass with the default backend: one line per event (pulse verdict or stuck
-//!    sensor) and the counters, then the `measure` lines (`fw/README.md` defines every key).
+//!    sensor) and the counters;
+//! 3. the chain scene's stream (`fw/data/chain_stream.bin`) through a monitor on the chain
+//!    scene, in `feed_slice` blocks between its recorded gaps as host-sim replays it, every
+//!    line after the prefix `chain `; then the `measure` lines (`fw/README.md` defines every
+//!    key).
 //!
 //! Output lines (defmt, decoded on the host by `defmt-print --log-format {s}`):
 //!
@@ -611,7 +618,7 @@ fn chain_pass(stream: &Stream) -> Option<Counters<DEFAULT_CLASSES>> {
     };
     let ends = stream.gaps.iter().map(|g| (g.position, Some(g.lost)));
     for (end, lost) in ends.chain([(total, None)]) {
-        let end = end.clamp(pos, total);
+        let end = end.min(total).max(pos);
         while pos < end {
             let len = (end - pos).min(REPLAY_BLOCK);
             for (i, b) in block.iter_mut().take(len).enumerate() {
