@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
 # Everything CI does for the firmware, in one script:
 #   1. fw/install.sh (targets, llvm-tools, qemu-system-arm, defmt-print; skips what is present);
-#   2. fw/stream.sh --check: host-sim regenerates the replayed stream (fw/data/
-#      paper_stream.bin and .truth.csv) and it must equal the shipped files byte for byte;
+#   2. fw/stream.sh --check: host-sim regenerates the replayed streams (fw/data/
+#      paper_stream.* from the paper scene, chain_stream.* from scenes/piezo_chain.toml) and
+#      they must equal the shipped files byte for byte;
 #   3. fw/measure.sh: builds the firmware, runs it in QEMU (Cortex-M4F), measures flash, RAM,
 #      stack and instructions, checks for kernel panic paths and enforces fw/budgets.txt;
 #      runs the front-end binary (fw/src/bin/front_end.rs) in QEMU; also builds for Cortex-M0
 #      and M33 and runs the M0 build (report only); builds the reference node (report and
 #      budget of its sizes);
 #   4. host replay: `cargo run -p host-sim --example node_replay`, where host-sim reads the
-#      same stream files and replays them through the kernel and prints the verdict lines;
-#   5. compares the node's pulse/stuck/classified/rejected/counters lines with the host's:
-#      they must be identical, pulse by pulse (same f32 arithmetic on both);
+#      same stream files and replays them through the kernel and prints the verdict lines
+#      (those of the chain stream after the prefix `chain `);
+#   5. compares the node's pulse/stuck/classified/rejected/counters lines with the host's, for
+#      each stream: they must be identical, pulse by pulse (same f32 arithmetic on both);
 #   6. the front-end check on the host (`cargo run -p host-sim --example front_end`): same
 #      output as in QEMU.
 # Exit status 0 only when all of it passes. Outputs: <cargo target dir>/fw (or $FW_OUT).
@@ -29,11 +31,12 @@ out=${FW_OUT:-$target_dir/fw}
 export FW_OUT=$out
 mkdir -p "$out"
 
-stream=fw/data/paper_stream.bin
-if [ ! -s "$stream" ] || [ $(( $(stat -c %s "$stream") % 2 )) != 0 ]; then
-    echo "$stream missing or not a whole number of i16 samples" >&2
-    exit 1
-fi
+for stream in fw/data/paper_stream.bin fw/data/chain_stream.bin; do
+    if [ ! -s "$stream" ] || [ $(( $(stat -c %s "$stream") % 2 )) != 0 ]; then
+        echo "$stream missing or not a whole number of i16 samples" >&2
+        exit 1
+    fi
+done
 
 status=0
 section "stream: regenerate with host-sim and compare with the shipped one (fw/stream.sh --check)"
@@ -51,21 +54,29 @@ else
     status=1
 fi
 
-section "compare node with host"
-lines='^(pulse|stuck|classified|rejected|counters) '
-if [ ! -s "$out/node.txt" ] || [ ! -s "$out/host.txt" ] \
-        || ! grep -q '^pulse ' "$out/host.txt"; then
-    echo "nothing to compare (node or host output missing, or no pulse line)"
+section "compare node with host (paper stream, then chain stream)"
+if [ ! -s "$out/node.txt" ] || [ ! -s "$out/host.txt" ]; then
+    echo "nothing to compare (node or host output missing)"
     status=1
-elif diff -u <(grep -E "$lines" "$out/host.txt") <(grep -E "$lines" "$out/node.txt") \
-        > "$out/compare.diff"; then
-    echo "node and host agree on all $(grep -cE "$lines" "$out/host.txt") lines" \
-        "($(grep -c '^pulse ' "$out/host.txt") pulse verdicts)"
-    grep '^truth ' "$out/host.txt" || true
 else
-    echo "node and host DIFFER:"
-    head -40 "$out/compare.diff"
-    status=1
+    : > "$out/compare.diff"
+    for prefix in "" "chain "; do
+        name=${prefix:-paper }
+        lines="^${prefix}(pulse|stuck|classified|rejected|counters) "
+        if ! grep -qE "^${prefix}pulse " "$out/host.txt"; then
+            echo "${name% }: nothing to compare (no pulse line on the host)"
+            status=1
+        elif diff -u <(grep -E "$lines" "$out/host.txt") <(grep -E "$lines" "$out/node.txt") \
+                >> "$out/compare.diff"; then
+            echo "${name% } stream: node and host agree on all $(grep -cE "$lines" "$out/host.txt") lines" \
+                "($(grep -cE "^${prefix}pulse " "$out/host.txt") pulse verdicts)"
+            grep -E "^${prefix}(truth|feed_check) " "$out/host.txt" || true
+        else
+            echo "${name% } stream: node and host DIFFER:"
+            head -40 "$out/compare.diff"
+            status=1
+        fi
+    done
 fi
 
 section "front end on the host (cargo run -p host-sim --example front_end)"

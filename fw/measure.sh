@@ -4,7 +4,7 @@
 # every budget holds.
 #
 # Measured (Cortex-M4F, thumbv7em-none-eabihf, QEMU netduinoplus2 with -icount shift=0):
-#   - flash and static RAM of the release ELF (llvm-size), also without the replayed stream;
+#   - flash and static RAM of the release ELF (llvm-size), also without the replayed streams;
 #   - what the firmware reports on its `measure` lines: kernel RAM (size_of), stack
 #     high-water marks, instructions per quiet sample / per pulse / for building the scene;
 #   - panic sites of the kernel left in the linked image (fw/nopanic.py).
@@ -31,15 +31,20 @@ target_dir=$(cargo metadata --format-version 1 --no-deps \
 out=${FW_OUT:-$target_dir/fw}
 mkdir -p "$out"
 stream=fw/data/paper_stream.bin
+chain_stream=fw/data/chain_stream.bin
+# Bytes of the replayed streams in an image: the node carries both, the front end the paper one.
+streams_node=$(( $(stat -c %s "$stream") + $(stat -c %s "$chain_stream") ))
+streams_fe=$(stat -c %s "$stream")
 
 section() { printf '\n== %s\n' "$*"; }
 
 # Flash and static RAM of an ELF from its allocated sections (llvm-size -A): flash is
 # everything loaded below 0x2000_0000 plus the .data initialisers, RAM is .data, .bss and
 # .uninit. Appends `<prefix>flash_bytes`, `<prefix>static_ram_bytes` and (for the node)
-# `<prefix>flash_code_bytes` (flash without the replayed stream) to measures.txt.
+# `<prefix>flash_code_bytes` (flash without the replayed streams, `$3` bytes of them) to
+# measures.txt.
 sizes() {
-    local elf=$1 prefix=$2
+    local elf=$1 prefix=$2 streams=$3
     "$tools/llvm-size" -A "$elf" | python3 -c '
 import sys
 prefix, stream = sys.argv[1], int(sys.argv[2])
@@ -60,7 +65,7 @@ for line in sys.stdin:
 print(f"{prefix}flash_bytes {flash}")
 print(f"{prefix}flash_code_bytes {flash - stream}")
 print(f"{prefix}static_ram_bytes {ram}")
-' "$prefix" "$(stat -c %s "$stream")"
+' "$prefix" "$streams"
 }
 
 : > "$out/measures.txt"
@@ -110,8 +115,9 @@ case "$map" in memory_map_ok\ 1*) ;; *) status=1 ;; esac
 
 section "size: llvm-size"
 "$tools/llvm-size" -A "$elf" | awk '$3 != 0 && $2 != 0'
-sizes "$elf" "" | tee -a "$out/measures.txt"
+sizes "$elf" "" "$streams_node" | tee -a "$out/measures.txt"
 echo "stream_bytes $(stat -c %s "$stream")" | tee -a "$out/measures.txt"
+echo "chain_stream_bytes $(stat -c %s "$chain_stream")" | tee -a "$out/measures.txt"
 
 section "panic paths: fw/nopanic.py"
 set +e
@@ -134,13 +140,13 @@ else
     echo "front-end binary FAILED (status $rc); its output:"
     cat "$out/front_end.txt"
 fi
-sizes "$elf_fe" "front_end_" | tee -a "$out/measures.txt"
+sizes "$elf_fe" "front_end_" "$streams_fe" | tee -a "$out/measures.txt"
 
 section "reference node: STM32F405 + IIS3DWB (build only; no IIS3DWB in QEMU)"
 # Built with the size-optimised `board` profile (fw/Cargo.toml); its flash and static RAM are
 # budgeted (reference_node_*).
 fwcargo build --profile board --features board --bin reference_node
-sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_" \
+sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_" 0 \
     | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
 
 section "other cores: the kernel alone"
@@ -153,12 +159,12 @@ if [ "${FW_SKIP_M0:-0}" != 1 ]; then
     section "Cortex-M0 (thumbv6m-none-eabi): same firmware, QEMU -cpu cortex-m0 (report only)"
     fwcargo build --release --target thumbv6m-none-eabi --bin node
     elf0="$target_dir/thumbv6m-none-eabi/release/node"
-    sizes "$elf0" "m0_" | tee -a "$out/measures.txt"
+    sizes "$elf0" "m0_" "$streams_node" | tee -a "$out/measures.txt"
     if FW_CPU=cortex-m0 fw/run.sh "$elf0" > "$out/node-m0.txt"; then
         sed -n 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/m0_\1 \2/p' "$out/node-m0.txt" \
             >> "$out/measures.txt"
-        if diff <(grep -E '^(pulse|stuck|classified|rejected|counters) ' "$out/node.txt") \
-                <(grep -E '^(pulse|stuck|classified|rejected|counters) ' "$out/node-m0.txt") > /dev/null; then
+        if diff <(grep -E '^(chain )?(pulse|stuck|classified|rejected|counters) ' "$out/node.txt") \
+                <(grep -E '^(chain )?(pulse|stuck|classified|rejected|counters) ' "$out/node-m0.txt") > /dev/null; then
             echo "m0_matches_m4 1" >> "$out/measures.txt"
             echo "Cortex-M0 verdicts identical to Cortex-M4F"
         else
@@ -171,7 +177,7 @@ if [ "${FW_SKIP_M0:-0}" != 1 ]; then
         cat "$out/node-m0.txt"
     fi
     fwcargo build --release --target thumbv8m.main-none-eabihf --bin node
-    sizes "$target_dir/thumbv8m.main-none-eabihf/release/node" "m33_" \
+    sizes "$target_dir/thumbv8m.main-none-eabihf/release/node" "m33_" "$streams_node" \
         | tee -a "$out/measures.txt"
 fi
 

@@ -367,8 +367,16 @@ fn solve5(mut m: [[f32; 6]; 5]) -> Option<[f32; 5]> {
             let b = m.get(j).and_then(|r| r.get(col)).map_or(0.0, |v| v.abs());
             a.total_cmp(&b)
         })?;
-        m.swap(col, pivot);
-        let p_row = *m.get(col)?;
+        // The pivot row and row `col` trade places (`get`, not `swap`: no bounds-check panic
+        // path in the image).
+        let p_row = *m.get(pivot)?;
+        let row_col = *m.get(col)?;
+        if let Some(r) = m.get_mut(pivot) {
+            *r = row_col;
+        }
+        if let Some(r) = m.get_mut(col) {
+            *r = p_row;
+        }
         let p = *p_row.get(col)?;
         if p.abs() <= 1e-20 || p.is_nan() {
             return None;

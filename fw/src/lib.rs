@@ -31,10 +31,12 @@ pub fn exit(ok: bool) -> ! {
     loop {}
 }
 
-/// Logs the `counters` line through defmt (compared with the host's by `fw/ci.sh`).
-pub fn log_counters(l: &CounterLine) {
+/// Logs the `counters` line through defmt (compared with the host's by `fw/ci.sh`), after
+/// `prefix` (`""`, or `"chain "` for the chain stream).
+pub fn log_counters(prefix: &str, l: &CounterLine) {
     defmt::println!(
-        "counters samples={=u64} pulses={=u32} ambiguous={=u32} out={=u32} rejected={=u32} stuck={=u32} gaps={=u32} lost={=u64} balanced={=u32}",
+        "{=str}counters samples={=u64} pulses={=u32} ambiguous={=u32} out={=u32} rejected={=u32} stuck={=u32} gaps={=u32} lost={=u64} balanced={=u32}",
+        prefix,
         l.samples,
         l.pulses,
         l.ambiguous,

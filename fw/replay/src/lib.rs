@@ -8,13 +8,21 @@
 //! `fw/data/paper_stream.truth.csv` the truth (host-sim/FORMATS.md). Of the truth the node needs
 //! only the `gap` rows (where samples were dropped and how many); they are parsed at compile
 //! time into [`GAPS`], so the CSV text takes no flash.
+//!
+//! A second stream, `fw/data/chain_stream.bin` and `.truth.csv`, comes from the chain scene
+//! `scenes/piezo_chain.toml` (a tail beam with three modes under a piezo accelerometer); it is
+//! [`CHAIN`] and its scene [`build_chain_scene`]. [`PAPER`] is the first stream in the same
+//! form.
 #![no_std]
 
 pub mod front_end;
 
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
-use coalshock::{Counters, ParticleClass, Report, Scene, Side, Verdict};
+use coalshock::{
+    Accelerometer, BeamMode, ChainDynamics, Counters, Material, ParticleClass, Range, Report,
+    Scene, SensorChain, Settings, Side, Speed, Verdict,
+};
 
 /// The replayed stream: little-endian i16 samples, dropped samples left out.
 pub static STREAM: &[u8] = include_bytes!("../../data/paper_stream.bin");
@@ -40,7 +48,68 @@ const GAP_COUNT: usize = count_rows(TRUTH, b"gap,");
 
 /// The `gap` rows of the truth file, in order (compile-time parse: a malformed file is a
 /// build error).
-pub const GAPS: [Gap; GAP_COUNT] = gap_rows(TRUTH);
+pub const GAPS: [Gap; GAP_COUNT] = gap_rows(TRUTH, STORED_SAMPLES);
+
+/// The chain scene's stream (`fw/stream.sh`): little-endian i16 samples, dropped samples left
+/// out.
+static CHAIN_BYTES: &[u8] = include_bytes!("../../data/chain_stream.bin");
+const CHAIN_TRUTH: &[u8] = include_bytes!("../../data/chain_stream.truth.csv");
+const CHAIN_STORED: usize = include_bytes!("../../data/chain_stream.bin").len() / 2;
+const CHAIN_GAP_COUNT: usize = count_rows(CHAIN_TRUTH, b"gap,");
+const CHAIN_GAPS: [Gap; CHAIN_GAP_COUNT] = gap_rows(CHAIN_TRUTH, CHAIN_STORED);
+
+/// A replayed stream: its stored samples and the gaps of its truth file.
+#[derive(Debug, Clone, Copy)]
+pub struct Stream {
+    /// Little-endian i16 samples, dropped samples left out.
+    pub bytes: &'static [u8],
+    /// Dropped samples, in order: feed the stored samples before `position`, then
+    /// `Monitor::gap(lost)`.
+    pub gaps: &'static [Gap],
+}
+
+/// The paper scene's stream (`fw/data/paper_stream.*`): [`STREAM`] and [`GAPS`].
+pub static PAPER: Stream = Stream {
+    bytes: STREAM,
+    gaps: &GAPS,
+};
+
+/// The chain scene's stream (`fw/data/chain_stream.*`, from `scenes/piezo_chain.toml`).
+pub static CHAIN: Stream = Stream {
+    bytes: CHAIN_BYTES,
+    gaps: &CHAIN_GAPS,
+};
+
+impl Stream {
+    /// Samples stored.
+    pub fn stored_samples(&self) -> usize {
+        self.bytes.len() / 2
+    }
+
+    /// Stored sample `i` (0 past the end).
+    pub fn sample(&self, i: usize) -> i16 {
+        let lo = self.bytes.get(2 * i).copied().unwrap_or(0);
+        let hi = self.bytes.get(2 * i + 1).copied().unwrap_or(0);
+        i16::from_le_bytes([lo, hi])
+    }
+
+    /// Every stored sample in order, with each recorded gap at its place.
+    pub fn inputs(&self) -> impl Iterator<Item = Input> + 'static {
+        let stream = *self;
+        let mut position = 0usize;
+        let mut gaps = stream.gaps.iter().peekable();
+        core::iter::from_fn(move || {
+            if let Some(g) = gaps.next_if(|g| g.position <= position) {
+                return Some(Input::Gap(g.lost));
+            }
+            if position < stream.stored_samples() {
+                position += 1;
+                return Some(Input::Sample(stream.sample(position - 1) as i32));
+            }
+            None
+        })
+    }
+}
 
 /// Header of the truth file; `position` and `length` are columns 3 and 4 (from 0).
 const TRUTH_HEADER: &[u8] = b"kind,id,sample,position,length,value,";
@@ -105,7 +174,7 @@ const fn column_u64(csv: &[u8], at: usize, col: usize) -> u64 {
     v
 }
 
-const fn gap_rows<const K: usize>(csv: &[u8]) -> [Gap; K] {
+const fn gap_rows<const K: usize>(csv: &[u8], stored: usize) -> [Gap; K] {
     assert!(
         starts_with(csv, 0, TRUTH_HEADER),
         "truth file: unexpected header"
@@ -120,7 +189,7 @@ const fn gap_rows<const K: usize>(csv: &[u8]) -> [Gap; K] {
         if starts_with(csv, at, b"gap,") {
             let position = column_u64(csv, at, 3) as usize;
             let lost = column_u64(csv, at, 4) as u32;
-            assert!(position <= STORED_SAMPLES, "truth file: gap past the end");
+            assert!(position <= stored, "truth file: gap past the end");
             assert!(
                 k == 0 || position >= out[k - 1].position,
                 "truth file: gaps out of order"
@@ -135,9 +204,7 @@ const fn gap_rows<const K: usize>(csv: &[u8]) -> [Gap; K] {
 
 /// Stored sample `i` of the stream (0 past the end).
 pub fn sample(i: usize) -> i16 {
-    let lo = STREAM.get(2 * i).copied().unwrap_or(0);
-    let hi = STREAM.get(2 * i + 1).copied().unwrap_or(0);
-    i16::from_le_bytes([lo, hi])
+    PAPER.sample(i)
 }
 
 /// One step of the replay: a stored sample, or a recorded gap before the next one.
@@ -152,24 +219,47 @@ pub enum Input {
 /// The stream as the node replays it: every stored sample in order, with each recorded gap
 /// at its place.
 pub fn inputs() -> impl Iterator<Item = Input> {
-    let mut position = 0usize;
-    let mut gaps = GAPS.iter().peekable();
-    core::iter::from_fn(move || {
-        if let Some(g) = gaps.next_if(|g| g.position <= position) {
-            return Some(Input::Gap(g.lost));
-        }
-        if position < STORED_SAMPLES {
-            position += 1;
-            return Some(Input::Sample(sample(position - 1) as i32));
-        }
-        None
-    })
+    PAPER.inputs()
 }
 
 /// The scene the node runs, with math backend `M`.
 #[inline(never)]
 pub fn build_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
     Scene::paper_for()
+}
+
+/// The chain scene `scenes/piezo_chain.toml` with math backend `M`: the paper's classes,
+/// plate and sensor (100 kS/s, 50 kg, 30 counts per m/s^2, 4 counts of noise, 16-bit ADC)
+/// behind a tail beam with three modes (180 Hz, zeta 0.02, gain 0.1; 650 Hz, 0.01, 0.05;
+/// 2100 Hz, 0.02, 0.1) and a piezo accelerometer (35 kHz, zeta 0.02); default settings.
+/// host-sim's `node_replay` example checks that it equals what host-sim makes of the file.
+#[inline(never)]
+pub fn build_chain_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
+    let radius = Range::new(0.015, 0.04);
+    let speed = Speed::Uniform(Range::new(1.0, 5.0));
+    let classes = [
+        ParticleClass::new("coal", Material::COAL, radius, speed),
+        ParticleClass::new("gangue", Material::SANDSTONE, radius, speed),
+    ];
+    let mode = |frequency_hz, damping_ratio, gain| BeamMode {
+        frequency_hz,
+        damping_ratio,
+        gain,
+    };
+    let dynamics = ChainDynamics::RIGID
+        .with_mode(mode(180.0, 0.02, 0.1))?
+        .with_mode(mode(650.0, 0.01, 0.05))?
+        .with_mode(mode(2100.0, 0.02, 0.1))?
+        .with_accelerometer(Accelerometer {
+            frequency_hz: 35_000.0,
+            damping_ratio: 0.02,
+        });
+    Scene::new(
+        Material::CARBON_STEEL,
+        &classes,
+        SensorChain::from_plate(100_000.0, 50.0, 30.0, 4.0, 16).with_dynamics(dynamics),
+        Settings::default(),
+    )
 }
 
 /// One `pulse` line, in integers so host and node print the same text.

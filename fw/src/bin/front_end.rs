@@ -37,6 +37,6 @@ fn main() -> ! {
         o.shift
     );
     defmt::println!("front_end counters_equal={=u32}", o.counters_equal as u32);
-    log_counters(&CounterLine::new(&o.front));
+    log_counters("", &CounterLine::new(&o.front));
     exit(o.ok())
 }

@@ -10,8 +10,15 @@
 //!    built, then every `feed` is timed with SysTick (deterministic under QEMU's
 //!    `-icount shift=0`: one instruction per virtual nanosecond, calibrated against a counted
 //!    loop) and the stack below the caller is painted and scanned; no logging;
+//!    Each pass also times quiet blocks through `Monitor::feed_slice` on the paper scene and
+//!    on the chain scene of `scenes/piezo_chain.toml` (three beam modes and an accelerometer
+//!    stage, equalised before detection);
 //! 2. a logging pass with the default backend: one line per event (pulse verdict or stuck
-//!    sensor) and the counters, then the `measure` lines (`fw/README.md` defines every key).
+//!    sensor) and the counters;
+//! 3. the chain scene's stream (`fw/data/chain_stream.bin`) through a monitor on the chain
+//!    scene, in `feed_slice` blocks between its recorded gaps as host-sim replays it, every
+//!    line after the prefix `chain `; then the `measure` lines (`fw/README.md` defines every
+//!    key).
 //!
 //! Output lines (defmt, decoded on the host by `defmt-print --log-format {s}`):
 //!
@@ -40,7 +47,9 @@ use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{Counters, Detector, Event, Monitor, Scene, Verdict};
 use coalshock_fw::exit;
 use coalshock_node_rt as rt;
-use coalshock_replay::{CounterLine, Input, PulseLine, build_scene, inputs};
+use coalshock_replay::{
+    CHAIN, CounterLine, Input, PulseLine, Stream, build_chain_scene, build_scene, inputs,
+};
 use core::hint::black_box;
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::{SCB, SYST, syst::SystClkSource};
@@ -395,12 +404,13 @@ fn report(prefix: &str, f: &Figures, clock: &Clock) {
     m("insns_finish", clock.insns(f.finish_ticks as u64, 1));
 }
 
-fn log_event<M: Backend>(n: u32, e: &Event, scene: &Scene<DEFAULT_CLASSES, M>) {
+fn log_event<M: Backend>(prefix: &str, n: u32, e: &Event, scene: &Scene<DEFAULT_CLASSES, M>) {
     match e {
         Event::Pulse(r) => {
             let l = PulseLine::new(r, scene.classes());
             defmt::println!(
-                "pulse {=u32} at={=u64} {=str} {=str} p_ppm={=u32} F_mN={=u32} t_ns={=u32}",
+                "{=str}pulse {=u32} at={=u64} {=str} {=str} p_ppm={=u32} F_mN={=u32} t_ns={=u32}",
+                prefix,
                 n,
                 l.at,
                 l.kind,
@@ -410,29 +420,37 @@ fn log_event<M: Backend>(n: u32, e: &Event, scene: &Scene<DEFAULT_CLASSES, M>) {
                 l.duration_ns
             );
         }
-        Event::Stuck { at_sample } => defmt::println!("stuck at={=u64}", at_sample),
+        Event::Stuck { at_sample } => {
+            defmt::println!("{=str}stuck at={=u64}", prefix, at_sample)
+        }
     }
 }
 
-fn log_counters<M: Backend>(m: &Monitor<DEFAULT_CLASSES, M>) {
+fn log_counters<M: Backend>(prefix: &str, m: &Monitor<DEFAULT_CLASSES, M>) {
     let c = m.counters();
     for (class, count) in m.scene().classes().iter().zip(c.classified.iter()) {
-        defmt::println!("classified {=str} {=u32}", class.name.as_str(), count);
+        defmt::println!(
+            "{=str}classified {=str} {=u32}",
+            prefix,
+            class.name.as_str(),
+            count
+        );
     }
     for reason in RejectReason::ALL {
         defmt::println!(
-            "rejected {=str} {=u32}",
+            "{=str}rejected {=str} {=u32}",
+            prefix,
             reason.name(),
             c.rejected_for(reason)
         );
     }
-    coalshock_fw::log_counters(&CounterLine::new(c));
+    coalshock_fw::log_counters(prefix, &CounterLine::new(c));
 }
 
 fn refused() -> ! {
     // No core::fmt on the node: the host replay (`cargo run -p host-sim --example node_replay`) builds the
     // same scene and prints the error.
-    defmt::println!("error scene: the paper scene was refused");
+    defmt::println!("error scene: the paper or chain scene was refused");
     exit(false)
 }
 
@@ -467,6 +485,15 @@ fn main() -> ! {
         same &= log_pass(Monitor::new(micro_scene), &default.counters);
     }
 
+    // The chain scene (default backend): its build and quiet blocks timed, then its stream,
+    // logged with the prefix `chain `.
+    let t0 = stamp();
+    let built = build_chain_scene::<DefaultBackend>();
+    let chain_scene_ticks = stamp() - t0;
+    let Ok(chain_scene) = built else { refused() };
+    let (chain_quiet, chain_quiet_events) = quiet_blocks(chain_scene.clone());
+    let chain = chain_pass(&CHAIN, chain_scene);
+
     let measure = |key: &str, value: u64| defmt::println!("measure {=str} {=u64}", key, value);
     defmt::println!("backend {=str}", DefaultBackend::NAME);
     measure(
@@ -481,11 +508,26 @@ fn main() -> ! {
         "detector_bytes",
         core::mem::size_of::<Detector<DefaultBackend>>() as u64,
     );
+    // Part of every monitor (rigid or not): the chain monitor is the same type and size.
+    measure(
+        "equaliser_bytes",
+        core::mem::size_of::<coalshock::Equaliser>() as u64,
+    );
     measure(
         "counters_bytes",
         core::mem::size_of::<Counters<DEFAULT_CLASSES>>() as u64,
     );
     report("", default, &clock);
+    // Quiet blocks through `feed_slice` on the chain scene, as `insns_quiet_block_sample_mean`.
+    measure("insns_chain_scene_build", clock.insns(chain_scene_ticks, 1));
+    measure(
+        "insns_quiet_block_sample_chain_mean",
+        clock
+            .insns(chain_quiet.sum, chain_quiet.n / 256)
+            .checked_div(chain_quiet.n)
+            .unwrap_or(0),
+    );
+    measure("quiet_block_chain_events", chain_quiet_events as u64);
     report("libm_", &libm, &clock);
     report("micromath_", &micro, &clock);
     let lowest = libm.lowest.min(micro.lowest).min(rt::lowest_touched());
@@ -494,6 +536,8 @@ fn main() -> ! {
     measure("cal_insns", clock.cal_insns);
     measure("passes_agree", same as u64);
     measure("counters_balanced", default.counters.balanced() as u64);
+    measure("chain_counters_balanced", chain.balanced() as u64);
+    measure("chain_samples", chain.samples);
     measure(
         "backends_same_verdicts",
         (libm.verdicts == micro.verdicts) as u64,
@@ -504,23 +548,81 @@ fn main() -> ! {
 /// Feeds the stream with logging; `true` when the counters equal the measuring pass's.
 #[inline(never)]
 fn log_pass<M: Backend>(
-    mut monitor: Monitor<DEFAULT_CLASSES, M>,
+    monitor: Monitor<DEFAULT_CLASSES, M>,
     measured: &Counters<DEFAULT_CLASSES>,
 ) -> bool {
+    let counters = replay_logged("", monitor, inputs());
+    counters == *measured
+}
+
+/// Feeds `inputs` (one `feed` per sample, `gap` at each recorded gap, then `finish`) with
+/// logging: every event line and the counters after `prefix`. Returns the counters.
+#[inline(never)]
+fn replay_logged<M: Backend>(
+    prefix: &str,
+    mut monitor: Monitor<DEFAULT_CLASSES, M>,
+    inputs: impl Iterator<Item = Input>,
+) -> Counters<DEFAULT_CLASSES> {
     let mut n = 0u32;
-    for input in inputs() {
+    for input in inputs {
         let event = match input {
             Input::Sample(s) => monitor.feed(s),
             Input::Gap(lost) => monitor.gap(lost),
         };
         if let Some(e) = event {
-            log_event(n, &e, monitor.scene());
+            log_event(prefix, n, &e, monitor.scene());
             n += 1;
         }
     }
     if let Some(e) = monitor.finish() {
-        log_event(n, &e, monitor.scene());
+        log_event(prefix, n, &e, monitor.scene());
     }
-    log_counters(&monitor);
-    monitor.counters() == measured
+    log_counters(prefix, &monitor);
+    *monitor.counters()
+}
+
+/// Samples per `feed_slice` call of the chain replay (a multiple of the kernel's equaliser
+/// block, so the equaliser's blocks fall where host-sim's do).
+const REPLAY_BLOCK: usize = 256;
+
+/// The chain scene's stream through a monitor on the chain scene (default backend), as
+/// host-sim replays it (`host_sim::stream::replay_events`): the stored samples between two
+/// recorded gaps through `Monitor::feed_slice` (in blocks of [`REPLAY_BLOCK`]),
+/// `Monitor::gap` at each gap, then `Monitor::finish`. Every line is logged after the prefix
+/// `chain `.
+#[inline(never)]
+fn chain_pass(
+    stream: &Stream,
+    scene: Scene<DEFAULT_CLASSES, DefaultBackend>,
+) -> Counters<DEFAULT_CLASSES> {
+    const PREFIX: &str = "chain ";
+    let mut monitor = Monitor::new(scene.clone());
+    let total = stream.stored_samples();
+    let mut block = [0i16; REPLAY_BLOCK];
+    let mut n = 0u32;
+    let mut pos = 0usize;
+    let mut log = |e: &Event| {
+        log_event(PREFIX, n, e, &scene);
+        n += 1;
+    };
+    let ends = stream.gaps.iter().map(|g| (g.position, Some(g.lost)));
+    for (end, lost) in ends.chain([(total, None)]) {
+        let end = end.min(total).max(pos);
+        while pos < end {
+            let len = (end - pos).min(REPLAY_BLOCK);
+            for (i, b) in block.iter_mut().take(len).enumerate() {
+                *b = stream.sample(pos + i);
+            }
+            monitor.feed_slice(block.get(..len).unwrap_or(&[]), |e| log(&e));
+            pos += len;
+        }
+        if let Some(e) = lost.and_then(|lost| monitor.gap(lost)) {
+            log(&e);
+        }
+    }
+    if let Some(e) = monitor.finish() {
+        log(&e);
+    }
+    log_counters(PREFIX, &monitor);
+    *monitor.counters()
 }
