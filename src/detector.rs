@@ -367,6 +367,7 @@ impl<M: Backend> Detector<M> {
                 if (v > self.trigger && self.above_ringing(v)) || sample >= self.adc_max {
                     return self.trigger(sample, value, index, false).or(stuck);
                 }
+                self.track_ringing(v);
                 // A sample far below the baseline moves it by at most the trigger level.
                 let step = if v < -self.trigger { -self.trigger } else { v };
                 self.baseline += step * self.alpha;
@@ -562,23 +563,26 @@ impl<M: Backend> Detector<M> {
         if (v > self.trigger && self.above_ringing(v)) || sample >= self.adc_max {
             return self.trigger(sample, value, index, true);
         }
+        self.track_ringing(v);
         self.track_baseline(value);
         None
     }
 
     /// `true` when `v` (above the trigger) also stands above the ringing: always for a rigid
-    /// chain; otherwise above [`RING_SIGMAS`] times the quiet RMS, whose mean square it then
-    /// updates (`v` is kept out of it once it triggers).
+    /// chain; otherwise above [`RING_SIGMAS`] times the quiet RMS (the same test as
+    /// [`Detector::feed_quiet_values`]).
     #[inline(always)]
-    fn above_ringing(&mut self, v: f32) -> bool {
-        if self.ring_weight <= 0.0 {
-            return true;
+    fn above_ringing(&self, v: f32) -> bool {
+        self.ring_weight <= 0.0 || v * v > RING_SIGMAS * RING_SIGMAS * self.ring_ms
+    }
+
+    /// A quiet sample `v` joins the quiet mean square (behind a non-rigid chain), exactly as
+    /// in [`Detector::feed_quiet_values`].
+    #[inline(always)]
+    fn track_ringing(&mut self, v: f32) {
+        if self.ring_weight > 0.0 {
+            self.ring_ms += self.ring_weight * (v * v - self.ring_ms);
         }
-        if v * v > RING_SIGMAS * RING_SIGMAS * self.ring_ms {
-            return true;
-        }
-        self.ring_ms += self.ring_weight * (v * v - self.ring_ms);
-        false
     }
 
     fn track_baseline(&mut self, value: f32) {

@@ -262,22 +262,23 @@ impl EqualiserDesign {
     }
 
     /// `sum h_n^2` of the impulse response (first [`NOISE_TAPS`] samples), from an impulse of
-    /// `2^16` counts after a reference sample of 0.
+    /// `2^14` counts after a reference sample of 0 (i16 samples, as a node feeds them, so that
+    /// the image carries one copy of the filter loop).
     fn impulse_energy(&self) -> f32 {
         let mut eq = Equaliser::new(self);
         let mut out = [0.0f32; 64];
         let mut sum = 0.0f32;
         for block in 0..NOISE_TAPS / 64 {
-            let mut input = [0i32; 64];
+            let mut input = [0i16; 64];
             if block == 0 {
                 if let Some(x) = input.get_mut(1) {
-                    *x = 1 << 16;
+                    *x = 1 << 14;
                 }
             }
             eq.process(&input, &mut out);
             sum += out.iter().map(|v| v * v).sum::<f32>();
         }
-        sum / (65536.0 * 65536.0)
+        sum / (16384.0 * 16384.0)
     }
 }
 
@@ -582,7 +583,8 @@ pub struct Equaliser {
     design: EqualiserDesign,
     /// States `(p, q)` of each section.
     state: [[f32; 2]; MAX_MODES],
-    /// The four previous inputs of the accelerometer's FIR, newest first.
+    /// The accelerometer FIR's partial sums (transposed form): `f_k` holds
+    /// `sum_(j >= k) c_j y_(n + k - j)` of the inputs so far.
     history: [f32; 4],
     /// The first sample seen: every input is taken relative to it (and it is added back to
     /// the output, the chain's DC gain being 1), so that the states stay small and keep
@@ -651,12 +653,13 @@ impl Equaliser {
         let mut state: [[f32; 2]; K] =
             core::array::from_fn(|i| self.state.get(i).copied().unwrap_or([0.0; 2]));
         let [c0, c1, c2, c3, c4] = self.design.taps.map_or([1.0, 0.0, 0.0, 0.0, 0.0], |t| t.c);
-        let [mut h1, mut h2, mut h3, mut h4] = self.history;
+        let [mut f1, mut f2, mut f3, mut f4] = self.history;
         for (&s, o) in raw.iter().zip(out.iter_mut()) {
             let x = s.into() as f32 - base;
+            // The FIR in transposed form: partial sums move, not inputs.
             let mut v = if ACC {
-                let v = c0 * x + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4;
-                (h4, h3, h2, h1) = (h3, h2, h1, x);
+                let v = c0 * x + f1;
+                (f1, f2, f3, f4) = (c1 * x + f2, c2 * x + f3, c3 * x + f4, c4 * x);
                 v
             } else {
                 x
@@ -671,7 +674,7 @@ impl Equaliser {
             }
             *o = v + base;
         }
-        self.history = [h1, h2, h3, h4];
+        self.history = [f1, f2, f3, f4];
         for (dst, src) in self.state.iter_mut().zip(state.iter()) {
             *dst = *src;
         }
