@@ -83,15 +83,18 @@ pub struct Accelerometer {
 }
 
 /// The chain's linear dynamics between the rigid plate and the ADC; every stage optional.
+/// Built from [`ChainDynamics::RIGID`] with [`ChainDynamics::with_mode`] and
+/// [`ChainDynamics::with_accelerometer`]; `crate::SensorChain::with_dynamics` designs its
+/// equaliser at the chain's sample rate (so that a firmware whose chain is rigid links no
+/// design code).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ChainDynamics {
-    /// Beam modes, the first `mode_count` in use.
-    pub modes: [BeamMode; MAX_MODES],
-    /// Number of beam modes in use (`0..=MAX_MODES`).
-    pub mode_count: u8,
-    /// The accelerometer's resonance, if modelled.
-    pub accelerometer: Option<Accelerometer>,
+    modes: [BeamMode; MAX_MODES],
+    mode_count: u8,
+    accelerometer: Option<Accelerometer>,
+    /// The equaliser and the sample rate (Hz) it was designed at.
+    design: Option<(f32, EqualiserDesign)>,
 }
 
 impl ChainDynamics {
@@ -104,6 +107,7 @@ impl ChainDynamics {
         }; MAX_MODES],
         mode_count: 0,
         accelerometer: None,
+        design: None,
     };
 
     /// Adds a beam mode; [`Error::Chain`] with [`ChainFault::TooManyModes`] past [`MAX_MODES`].
@@ -117,13 +121,40 @@ impl ChainDynamics {
             })?;
         *slot = mode;
         self.mode_count += 1;
+        self.design = None;
         Ok(self)
     }
 
     /// Sets the accelerometer resonance.
     pub fn with_accelerometer(mut self, accelerometer: Accelerometer) -> Self {
         self.accelerometer = Some(accelerometer);
+        self.design = None;
         self
+    }
+
+    /// The accelerometer resonance, if modelled.
+    pub fn accelerometer(&self) -> Option<Accelerometer> {
+        self.accelerometer
+    }
+
+    /// The same dynamics with their equaliser designed at `sample_rate_hz`
+    /// ([`EqualiserDesign::new`]); what cannot be inverted is refused by stage.
+    pub fn designed<M: Backend>(mut self, sample_rate_hz: f32) -> Result<Self, Error> {
+        let design = EqualiserDesign::new::<M>(&self, sample_rate_hz)?;
+        self.design = Some((sample_rate_hz, design));
+        Ok(self)
+    }
+
+    /// The equaliser for a chain sampled at `sample_rate_hz`: the identity for a rigid chain,
+    /// else the one designed at that rate ([`ChainFault::NotDesigned`] when there is none).
+    pub fn equaliser_at(&self, sample_rate_hz: f32) -> Result<EqualiserDesign, Error> {
+        if self.is_rigid() {
+            return Ok(EqualiserDesign::IDENTITY);
+        }
+        match self.design {
+            Some((fs, design)) if fs == sample_rate_hz => Ok(design),
+            _ => Err(chain(ChainStage::Beam, ChainFault::NotDesigned)),
+        }
     }
 
     /// The beam modes in use.
@@ -169,6 +200,9 @@ pub enum ChainFault {
     NotConverged,
     /// More than [`MAX_MODES`] modes.
     TooManyModes,
+    /// The chain's equaliser was not designed at the chain's sample rate: give the dynamics
+    /// to `SensorChain::with_dynamics` after setting the rate.
+    NotDesigned,
 }
 
 /// One second-order section `k (w^2 + f1 w + f0) / (w^2 + e1 w + e0)` in `w = z - 1`, run as
@@ -220,6 +254,12 @@ impl EqualiserDesign {
     /// Designs the equaliser of `dynamics` at `sample_rate_hz`; refuses a stage that cannot be
     /// inverted with [`Error::Chain`] naming it.
     pub fn new<M: Backend>(dynamics: &ChainDynamics, sample_rate_hz: f32) -> Result<Self, Error> {
+        if !sample_rate_hz.is_finite() {
+            return Err(Error::NonFinite("sample_rate_hz"));
+        }
+        if sample_rate_hz <= 0.0 {
+            return Err(Error::NonPositive("sample_rate_hz"));
+        }
         if dynamics.mode_count as usize > MAX_MODES {
             return Err(chain(ChainStage::Beam, ChainFault::TooManyModes));
         }

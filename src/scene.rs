@@ -110,10 +110,17 @@ impl SensorChain {
         }
     }
 
-    /// The same chain with the beam modes and accelerometer resonance `dynamics`.
-    pub fn with_dynamics(mut self, dynamics: ChainDynamics) -> Self {
-        self.dynamics = dynamics;
-        self
+    /// The same chain with the beam modes and accelerometer resonance `dynamics`, whose
+    /// equaliser is designed here at the chain's sample rate with the default backend;
+    /// a stage that cannot be inverted is refused with [`Error::Chain`] naming it.
+    pub fn with_dynamics(self, dynamics: ChainDynamics) -> Result<Self, Error> {
+        self.with_dynamics_in::<DefaultBackend>(dynamics)
+    }
+
+    /// [`SensorChain::with_dynamics`] with the math backend `M`.
+    pub fn with_dynamics_in<M: Backend>(mut self, dynamics: ChainDynamics) -> Result<Self, Error> {
+        self.dynamics = dynamics.designed::<M>(self.sample_rate_hz)?;
+        Ok(self)
     }
 
     fn check(&self) -> Result<(), Error> {
@@ -328,11 +335,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         plate.validate()?;
         sensor.check()?;
         settings.check()?;
-        let equaliser = if sensor.dynamics.is_rigid() {
-            EqualiserDesign::IDENTITY
-        } else {
-            EqualiserDesign::new::<M>(&sensor.dynamics, sensor.sample_rate_hz)?
-        };
+        let equaliser = sensor.dynamics.equaliser_at(sensor.sample_rate_hz)?;
         if classes.len() < 2 {
             return Err(Error::TooFewClasses);
         }

@@ -161,9 +161,31 @@ fn noise_gain_is_the_impulse_energy() {
 }
 
 fn refused(d: ChainDynamics) -> Error {
-    let sensor = SensorChain::from_plate(FS, 500.0, 100.0, 4.0, 16).with_dynamics(d);
+    SensorChain::from_plate(FS, 500.0, 100.0, 4.0, 16)
+        .with_dynamics(d)
+        .unwrap_err()
+}
+
+/// A chain whose equaliser was not designed at its sample rate (the rate changed after, or
+/// the dynamics were never designed) is refused when the scene is built.
+#[test]
+fn a_chain_not_designed_at_its_rate_is_refused() {
+    let d = dynamics(&[mode(180.0, 0.02, 0.1)], None);
     let paper = Scene::<4>::paper().unwrap();
-    Scene::<4>::new(*paper.plate(), paper.classes(), sensor, *paper.settings()).unwrap_err()
+    let build = |sensor: SensorChain| {
+        Scene::<4>::new(*paper.plate(), paper.classes(), sensor, *paper.settings())
+    };
+    let not_designed = Error::Chain {
+        stage: ChainStage::Beam,
+        fault: ChainFault::NotDesigned,
+    };
+    let mut sensor = SensorChain::from_plate(FS, 50.0, 30.0, 4.0, 16);
+    sensor.dynamics = d;
+    assert_eq!(build(sensor).unwrap_err(), not_designed);
+    let mut sensor = sensor.with_dynamics(d).unwrap();
+    assert!(build(sensor).is_ok());
+    sensor.sample_rate_hz = 50_000.0;
+    assert_eq!(build(sensor).unwrap_err(), not_designed);
 }
 
 #[test]
@@ -242,7 +264,9 @@ fn feed_and_feed_slice_agree_behind_a_chain() {
         ],
         Some((35_000.0, 0.02)),
     );
-    let sensor = SensorChain::from_plate(FS, 50.0, 30.0, 4.0, 16).with_dynamics(d);
+    let sensor = SensorChain::from_plate(FS, 50.0, 30.0, 4.0, 16)
+        .with_dynamics(d)
+        .unwrap();
     let paper = Scene::<4>::paper().unwrap();
     let scene =
         Scene::<4>::new(*paper.plate(), paper.classes(), sensor, *paper.settings()).unwrap();

@@ -104,7 +104,8 @@ pub fn sensor_to_kernel(s: &SensorSpec) -> Result<SensorChain, ConvertError> {
         s.noise_rms_counts as f32,
         s.adc_bits,
     )
-    .with_dynamics(dynamics))
+    .with_dynamics(dynamics)
+    .map_err(ConvertError::Kernel)?)
 }
 
 /// The kernel's default `Settings` with the file's overrides applied.

@@ -257,7 +257,7 @@ pub fn build_chain_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coal
     Scene::new(
         Material::CARBON_STEEL,
         &classes,
-        SensorChain::from_plate(100_000.0, 50.0, 30.0, 4.0, 16).with_dynamics(dynamics),
+        SensorChain::from_plate(100_000.0, 50.0, 30.0, 4.0, 16).with_dynamics_in::<M>(dynamics)?,
         Settings::default(),
     )
 }
