@@ -654,23 +654,31 @@ impl Equaliser {
     }
 
     /// Equalises `raw` into `out` (the shorter length of the two), sample by sample in order.
-    /// One loop per number of sections (the FIR always runs, with the identity taps when
-    /// there is no accelerometer stage: five copies of the loop in an image, not ten).
-    #[inline(never)]
+    #[inline]
     pub fn process<S: Copy + Into<i32>>(&mut self, raw: &[S], out: &mut [f32]) {
-        match self.design.section_count {
-            0 => self.run::<S, 0>(raw, out),
-            1 => self.run::<S, 1>(raw, out),
-            2 => self.run::<S, 2>(raw, out),
-            3 => self.run::<S, 3>(raw, out),
-            _ => self.run::<S, 4>(raw, out),
+        let acc = self.design.taps.is_some();
+        match (self.design.section_count, acc) {
+            (0, false) => self.run::<S, 0, false>(raw, out),
+            (0, true) => self.run::<S, 0, true>(raw, out),
+            (1, false) => self.run::<S, 1, false>(raw, out),
+            (1, true) => self.run::<S, 1, true>(raw, out),
+            (2, false) => self.run::<S, 2, false>(raw, out),
+            (2, true) => self.run::<S, 2, true>(raw, out),
+            (3, false) => self.run::<S, 3, false>(raw, out),
+            (3, true) => self.run::<S, 3, true>(raw, out),
+            (_, false) => self.run::<S, 4, false>(raw, out),
+            (_, true) => self.run::<S, 4, true>(raw, out),
         }
     }
 
-    /// The loop for `K` sections and the accelerometer's FIR: coefficients and states in
-    /// locals so that they stay in registers.
+    /// The loop for `K` sections, with or without the accelerometer's FIR: coefficients and
+    /// states in locals so that they stay in registers.
     #[inline(always)]
-    fn run<S: Copy + Into<i32>, const K: usize>(&mut self, raw: &[S], out: &mut [f32]) {
+    fn run<S: Copy + Into<i32>, const K: usize, const ACC: bool>(
+        &mut self,
+        raw: &[S],
+        out: &mut [f32],
+    ) {
         let Some(first) = raw.first() else {
             return;
         };
@@ -689,8 +697,13 @@ impl Equaliser {
         for (&s, o) in raw.iter().zip(out.iter_mut()) {
             let x = s.into() as f32 - base;
             // The FIR in transposed form: partial sums move, not inputs.
-            let mut v = c0 * x + f1;
-            (f1, f2, f3, f4) = (c1 * x + f2, c2 * x + f3, c3 * x + f4, c4 * x);
+            let mut v = if ACC {
+                let v = c0 * x + f1;
+                (f1, f2, f3, f4) = (c1 * x + f2, c2 * x + f3, c3 * x + f4, c4 * x);
+                v
+            } else {
+                x
+            };
             for (sec, st) in sections.iter().zip(state.iter_mut()) {
                 let [g1, g0] = sec.g;
                 let [e1, e0] = sec.e;

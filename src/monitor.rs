@@ -100,7 +100,6 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
 
     /// One block of at most [`EQUALISE_BLOCK`] samples through the equaliser, then the
     /// detector: its quiet loop as far as it goes, one sample at a time where something happens.
-    #[inline(never)]
     fn feed_block_equalised<S: Copy + Into<i32>>(
         &mut self,
         block: &[S],
