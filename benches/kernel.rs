@@ -1,11 +1,14 @@
 //! Host benchmarks of the kernel: ns per quiet sample (one `feed` call each, and through
-//! `feed_slice` in blocks of 256), per classified pulse, per scene build. Quiet figures are
-//! for 10 000 samples.
+//! `feed_slice` in blocks of 256, rigid and behind a chain of three beam modes and an
+//! accelerometer), per classified pulse, per scene build. Quiet figures are for 10 000
+//! samples.
 //! Run with `cargo bench --bench kernel` and `cargo bench --bench kernel --features micromath`.
 
 use coalshock::hertz::impact;
 use coalshock::material::effective_modulus_pa;
-use coalshock::{Material, Measurement, Monitor, Scene};
+use coalshock::{
+    Accelerometer, BeamMode, ChainDynamics, Material, Measurement, Monitor, Scene, SensorChain,
+};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -30,7 +33,7 @@ fn pulse_block() -> Vec<i32> {
 
 fn bench(c: &mut Criterion) {
     let backend = coalshock::math::BACKEND;
-    let scene = Scene::paper().expect("paper scene");
+    let scene: Scene = Scene::paper().expect("paper scene");
     let q = quiet(10_000);
     c.bench_function(&format!("{backend}/quiet sample"), |b| {
         let mut m = Monitor::new(scene.clone());
@@ -49,6 +52,42 @@ fn bench(c: &mut Criterion) {
             let mut m = Monitor::new(scene.clone());
             for &s in &q {
                 m.feed(s);
+            }
+            b.iter(|| {
+                for chunk in q.chunks(256) {
+                    m.feed_slice(black_box(chunk), |e| {
+                        black_box(e);
+                    });
+                }
+            })
+        },
+    );
+    // scenes/piezo_chain.toml's chain on the paper scene's classes.
+    let mode = |frequency_hz, damping_ratio, gain| BeamMode {
+        frequency_hz,
+        damping_ratio,
+        gain,
+    };
+    let dynamics = ChainDynamics::RIGID
+        .with_mode(mode(180.0, 0.02, 0.1))
+        .and_then(|d| d.with_mode(mode(650.0, 0.01, 0.05)))
+        .and_then(|d| d.with_mode(mode(2100.0, 0.02, 0.1)))
+        .expect("three modes")
+        .with_accelerometer(Accelerometer {
+            frequency_hz: 35_000.0,
+            damping_ratio: 0.02,
+        });
+    let sensor = SensorChain::from_plate(100_000.0, 50.0, 30.0, 4.0, 16)
+        .with_dynamics(dynamics)
+        .expect("chain");
+    let chain_scene: Scene =
+        Scene::new(*scene.plate(), scene.classes(), sensor, *scene.settings()).expect("chain");
+    c.bench_function(
+        &format!("{backend}/quiet sample behind a chain, feed_slice blocks of 256"),
+        |b| {
+            let mut m = Monitor::new(chain_scene.clone());
+            for chunk in q.chunks(256) {
+                m.feed_slice(chunk, |_| {});
             }
             b.iter(|| {
                 for chunk in q.chunks(256) {
