@@ -30,7 +30,7 @@
 //! (`x - d / delta_max`) and for the damped laws the clamp at zero
 //! ([`ForceLaw::clamp_switch`], the unclamped force divided by a positive factor; the Adams law
 //! switches off before separation and on again just before it, when `k delta^1.5` outgrows
-//! the STEP-ramped damping). The search ([`crate::events`]) halves the step and drops a part
+//! the STEP-ramped damping). The search (`events.rs`) halves the step and drops a part
 //! only where an enclosure (Bernstein coefficients of the quartic, or
 //! [`ForceLaw::clamp_switch_bounds`] over the box of states the quartics take) proves no sign
 //! change, so a switch inside a step is not stepped over, and it takes the earliest root
