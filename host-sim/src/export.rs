@@ -82,26 +82,43 @@ fn class(out: &mut String, c: &ParticleClass) {
         Speed::Uniform(r) => format!("Speed::Uniform({})", range(&r)),
         Speed::DropHeight(r) => format!("Speed::DropHeight({})", range(&r)),
     };
-    let _ = write!(
-        out,
-        "        ParticleClass {{\n            \
-                    prior: {},\n            \
-                    ..ParticleClass::new(\n                \
-                        {:?},\n                \
-                        {},\n                \
-                        {},\n                \
-                        {},\n            \
-                    )\n        \
-                }},\n",
-        lit(c.prior),
+    let args = format!(
+        "ParticleClass::new(\n{0}    {1:?},\n{0}    {2},\n{0}    {3},\n{0}    {4},\n{0})",
+        "{indent}",
         c.name.as_str(),
         material(&c.material),
         range(&c.radius_m),
         speed,
     );
+    // `ParticleClass::new` gives a prior of 1; any other is set on top.
+    if c.prior.to_bits() == 1.0f32.to_bits() {
+        let _ = writeln!(out, "        {},", args.replace("{indent}", "        "));
+    } else {
+        let _ = write!(
+            out,
+            "        ParticleClass {{\n            prior: {},\n            ..{}\n        }},\n",
+            lit(c.prior),
+            args.replace("{indent}", "            "),
+        );
+    }
 }
 
+fn contact_is_default(c: &ContactCalibration) -> bool {
+    let d = Settings::default().contact;
+    [
+        (c.force_ratio, d.force_ratio),
+        (c.duration_ratio, d.duration_ratio),
+        (c.shape_ratio, d.shape_ratio),
+        (c.skewness, d.skewness),
+    ]
+    .iter()
+    .all(|(a, b)| a.to_bits() == b.to_bits())
+}
+
+/// The settings as `Settings { .., ..Settings::default() }` with every field whose bits differ
+/// from the default's (host-sim starts from the default too), or `Settings::default()`.
 fn settings(out: &mut String, s: &Settings) {
+    let d = Settings::default();
     // Destructured in full: a field added to the kernel's settings is a build error here.
     let Settings {
         trigger_sigmas,
@@ -114,52 +131,62 @@ fn settings(out: &mut String, s: &Settings) {
         out_sigmas,
         separability_grid,
         shape_tolerance,
-        contact:
-            ContactCalibration {
-                force_ratio,
-                duration_ratio,
-                shape_ratio,
-                skewness,
-            },
+        contact,
         spike_fraction,
         skew_tolerance,
     } = *s;
-    let _ = write!(
-        out,
-        "    let settings = Settings {{\n        \
-                trigger_sigmas: {},\n        \
-                release_sigmas: {},\n        \
-                hold_samples: {hold_samples},\n        \
-                baseline_tau_s: {},\n        \
-                stuck_samples: {stuck_samples},\n        \
-                model_sigma: {},\n        \
-                confidence: {},\n        \
-                out_sigmas: {},\n        \
-                separability_grid: {separability_grid},\n        \
-                shape_tolerance: {},\n        \
-                contact: ContactCalibration {{\n            \
-                    force_ratio: {},\n            \
-                    duration_ratio: {},\n            \
-                    shape_ratio: {},\n            \
-                    skewness: {},\n        \
-                }},\n        \
-                spike_fraction: {},\n        \
-                skew_tolerance: {},\n    \
-            }};\n",
-        lit(trigger_sigmas),
-        lit(release_sigmas),
-        lit(baseline_tau_s),
-        lit(model_sigma),
-        lit(confidence),
-        lit(out_sigmas),
-        lit(shape_tolerance),
-        lit(force_ratio),
-        lit(duration_ratio),
-        lit(shape_ratio),
-        lit(skewness),
-        lit(spike_fraction),
-        lit(skew_tolerance),
-    );
+    let mut fields = Vec::new();
+    let mut float = |name: &str, v: f32, default: f32| {
+        if v.to_bits() != default.to_bits() {
+            fields.push(format!("        {name}: {},\n", lit(v)));
+        }
+    };
+    float("trigger_sigmas", trigger_sigmas, d.trigger_sigmas);
+    float("release_sigmas", release_sigmas, d.release_sigmas);
+    float("baseline_tau_s", baseline_tau_s, d.baseline_tau_s);
+    float("model_sigma", model_sigma, d.model_sigma);
+    float("confidence", confidence, d.confidence);
+    float("out_sigmas", out_sigmas, d.out_sigmas);
+    float("shape_tolerance", shape_tolerance, d.shape_tolerance);
+    float("spike_fraction", spike_fraction, d.spike_fraction);
+    float("skew_tolerance", skew_tolerance, d.skew_tolerance);
+    let mut int = |name: &str, v: u16, default: u16| {
+        if v != default {
+            fields.push(format!("        {name}: {v},\n"));
+        }
+    };
+    int("hold_samples", hold_samples, d.hold_samples);
+    int("stuck_samples", stuck_samples, d.stuck_samples);
+    int("separability_grid", separability_grid, d.separability_grid);
+    let ContactCalibration {
+        force_ratio,
+        duration_ratio,
+        shape_ratio,
+        skewness,
+    } = contact;
+    if !contact_is_default(&contact) {
+        fields.push(format!(
+            "        contact: ContactCalibration {{\n            \
+                         force_ratio: {},\n            \
+                         duration_ratio: {},\n            \
+                         shape_ratio: {},\n            \
+                         skewness: {},\n        \
+                     }},\n",
+            lit(force_ratio),
+            lit(duration_ratio),
+            lit(shape_ratio),
+            lit(skewness),
+        ));
+    }
+    if fields.is_empty() {
+        out.push_str("    let settings = Settings::default();\n");
+    } else {
+        out.push_str("    let settings = Settings {\n");
+        for f in fields {
+            out.push_str(&f);
+        }
+        out.push_str("        ..Settings::default()\n    };\n");
+    }
 }
 
 /// The Rust source of `scene` (read from the file named `source` in the header): a module
@@ -189,7 +216,10 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
          //! byte.\n\
          \n"
     );
-    let mut uses = vec!["ContactCalibration", "Error", "Material", "ParticleClass"];
+    let mut uses = vec!["Error", "Material", "ParticleClass"];
+    if !contact_is_default(&settings_k.contact) {
+        uses.push("ContactCalibration");
+    }
     uses.extend(["Range", "Scene", "SensorChain", "Settings", "Speed"]);
     if !rigid {
         uses.push("ChainDynamics");
@@ -202,6 +232,7 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
     }
     uses.sort_unstable();
     // One import list, filled to rustfmt's 100 columns as it would.
+    let one_line = format!("use coalshock::{{{}}};", uses.join(", "));
     let mut lines = Vec::new();
     let mut line = String::from("   ");
     for u in uses {
@@ -211,12 +242,16 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
         let _ = write!(line, " {u},");
     }
     lines.push(line);
+    let list = if one_line.len() <= 100 {
+        one_line
+    } else {
+        format!("use coalshock::{{\n{}\n}};", lines.join("\n"))
+    };
     let _ = write!(
         out,
         "use coalshock::math::Backend;\n\
          use coalshock::scene::DEFAULT_CLASSES;\n\
-         use coalshock::{{\n{}\n}};\n\n",
-        lines.join("\n")
+         {list}\n\n"
     );
     let _ = write!(
         out,
@@ -348,7 +383,9 @@ mod tests {
             }
             has(material(kernel.plate()));
             for c in kernel.classes() {
-                has(format!("prior: {}", lit(c.prior)));
+                if c.prior != 1.0 {
+                    has(format!("prior: {}", lit(c.prior)));
+                }
                 has(format!("{:?}", c.name.as_str()));
                 has(material(&c.material));
                 has(range(&c.radius_m));
@@ -372,27 +409,57 @@ mod tests {
                 !chain.dynamics.is_rigid(),
                 "{name}"
             );
+            // Every setting is written when its bits differ from the default's, else it is the
+            // default's (`..Settings::default()`).
             let st = kernel.settings();
-            for (field, v) in [
-                ("trigger_sigmas", st.trigger_sigmas),
-                ("release_sigmas", st.release_sigmas),
-                ("baseline_tau_s", st.baseline_tau_s),
-                ("model_sigma", st.model_sigma),
-                ("confidence", st.confidence),
-                ("out_sigmas", st.out_sigmas),
-                ("shape_tolerance", st.shape_tolerance),
-                ("force_ratio", st.contact.force_ratio),
-                ("duration_ratio", st.contact.duration_ratio),
-                ("shape_ratio", st.contact.shape_ratio),
-                ("skewness", st.contact.skewness),
-                ("spike_fraction", st.spike_fraction),
-                ("skew_tolerance", st.skew_tolerance),
+            let d = Settings::default();
+            for (field, v, dv) in [
+                ("trigger_sigmas", st.trigger_sigmas, d.trigger_sigmas),
+                ("release_sigmas", st.release_sigmas, d.release_sigmas),
+                ("baseline_tau_s", st.baseline_tau_s, d.baseline_tau_s),
+                ("model_sigma", st.model_sigma, d.model_sigma),
+                ("confidence", st.confidence, d.confidence),
+                ("out_sigmas", st.out_sigmas, d.out_sigmas),
+                ("shape_tolerance", st.shape_tolerance, d.shape_tolerance),
+                ("spike_fraction", st.spike_fraction, d.spike_fraction),
+                ("skew_tolerance", st.skew_tolerance, d.skew_tolerance),
             ] {
-                has(format!("{field}: {},", lit(v)));
+                let written = format!("{field}: {},", lit(v));
+                assert_eq!(
+                    text.contains(&written),
+                    v.to_bits() != dv.to_bits(),
+                    "{name}: {field}"
+                );
             }
-            has(format!("hold_samples: {},", st.hold_samples));
-            has(format!("stuck_samples: {},", st.stuck_samples));
-            has(format!("separability_grid: {},", st.separability_grid));
+            for (field, v, dv) in [
+                ("hold_samples", st.hold_samples, d.hold_samples),
+                ("stuck_samples", st.stuck_samples, d.stuck_samples),
+                (
+                    "separability_grid",
+                    st.separability_grid,
+                    d.separability_grid,
+                ),
+            ] {
+                assert_eq!(
+                    text.contains(&format!("{field}: {v},")),
+                    v != dv,
+                    "{name}: {field}"
+                );
+            }
+            let c = st.contact;
+            if contact_is_default(&c) {
+                assert!(!text.contains("ContactCalibration"), "{name}");
+            } else {
+                for (field, v) in [
+                    ("force_ratio", c.force_ratio),
+                    ("duration_ratio", c.duration_ratio),
+                    ("shape_ratio", c.shape_ratio),
+                    ("skewness", c.skewness),
+                ] {
+                    has(format!("{field}: {},", lit(v)));
+                }
+            }
+            assert!(text.contains("Settings::default()"), "{name}");
         }
     }
 

@@ -7,32 +7,26 @@
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{
-    Accelerometer, BeamMode, ChainDynamics, ContactCalibration, Error, Material, ParticleClass,
-    Range, Scene, SensorChain, Settings, Speed,
+    Accelerometer, BeamMode, ChainDynamics, Error, Material, ParticleClass, Range, Scene,
+    SensorChain, Settings, Speed,
 };
 
 /// The scene with math backend `M` (the chain's equaliser designed with `M`).
 #[inline(never)]
 pub fn scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, Error> {
     let classes = [
-        ParticleClass {
-            prior: 1.0,
-            ..ParticleClass::new(
-                "coal",
-                Material::new(1380.0, 5300000000.0, 0.32),
-                Range::new(0.015, 0.04),
-                Speed::Uniform(Range::new(1.0, 5.0)),
-            )
-        },
-        ParticleClass {
-            prior: 1.0,
-            ..ParticleClass::new(
-                "gangue",
-                Material::new(2487.0, 13500000000.0, 0.123),
-                Range::new(0.015, 0.04),
-                Speed::Uniform(Range::new(1.0, 5.0)),
-            )
-        },
+        ParticleClass::new(
+            "coal",
+            Material::new(1380.0, 5300000000.0, 0.32),
+            Range::new(0.015, 0.04),
+            Speed::Uniform(Range::new(1.0, 5.0)),
+        ),
+        ParticleClass::new(
+            "gangue",
+            Material::new(2487.0, 13500000000.0, 0.123),
+            Range::new(0.015, 0.04),
+            Speed::Uniform(Range::new(1.0, 5.0)),
+        ),
     ];
     let sensor = SensorChain::from_plate(100000.0, 50.0, 30.0, 4.0, 16);
     let dynamics = ChainDynamics::RIGID
@@ -56,26 +50,7 @@ pub fn scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, Error> {
             damping_ratio: 0.02,
         });
     let sensor = sensor.with_dynamics_in::<M>(dynamics)?;
-    let settings = Settings {
-        trigger_sigmas: 6.0,
-        release_sigmas: 3.0,
-        hold_samples: 2,
-        baseline_tau_s: 0.02,
-        stuck_samples: 64,
-        model_sigma: 0.01,
-        confidence: 0.9,
-        out_sigmas: 4.0,
-        separability_grid: 48,
-        shape_tolerance: 0.02,
-        contact: ContactCalibration {
-            force_ratio: 1.0,
-            duration_ratio: 1.0,
-            shape_ratio: 1.0,
-            skewness: 0.0,
-        },
-        spike_fraction: 0.3,
-        skew_tolerance: 0.05,
-    };
+    let settings = Settings::default();
     Scene::new(
         Material::new(7850.0, 206000000000.0, 0.28),
         &classes,
