@@ -3,7 +3,8 @@
 #   1. fw/install.sh (targets, llvm-tools, qemu-system-arm, defmt-print; skips what is present);
 #   2. fw/stream.sh --check: host-sim regenerates the replayed streams (fw/data/
 #      paper_stream.* from the paper scene, chain_stream.* from scenes/piezo_chain.toml) and
-#      they must equal the shipped files byte for byte;
+#      `host-sim export` the node's scenes (fw/replay/src/scenes/), and they must equal the
+#      shipped files byte for byte;
 #   3. fw/measure.sh: builds the firmware, runs it in QEMU (Cortex-M4F), measures flash, RAM,
 #      stack and instructions, checks for kernel panic paths and enforces fw/budgets.txt;
 #      runs the front-end binary (fw/src/bin/front_end.rs) in QEMU; also builds for Cortex-M0
@@ -39,7 +40,7 @@ for stream in fw/data/paper_stream.bin fw/data/chain_stream.bin; do
 done
 
 status=0
-section "stream: regenerate with host-sim and compare with the shipped one (fw/stream.sh --check)"
+section "streams and scenes: regenerate with host-sim and compare with the shipped ones (fw/stream.sh --check)"
 fw/stream.sh --check || status=1
 
 section "firmware: build, run, measure, budgets (fw/measure.sh)"

@@ -8,8 +8,10 @@
 # pulses, EMI spikes, a stuck run, and a stream that ends inside the last pulse), so the node
 # shows rejections as well as verdicts. Same arguments, same bytes: every random draw comes
 # from the seed.
+# Also the node's scenes, fw/replay/src/scenes/paper.rs and piezo_chain.rs: Rust source written
+# by `host-sim export` from the same scene files (the kernel scene host-sim builds from each).
 #
-# Usage: fw/stream.sh           regenerates the shipped pairs in fw/data/
+# Usage: fw/stream.sh           regenerates the shipped pairs in fw/data/ and the scenes
 #        fw/stream.sh --check   regenerates them in a temporary directory and fails (status 1)
 #                               unless every file equals the shipped one byte for byte
 #
@@ -23,12 +25,18 @@ faults=(--pileup-share 0.08 --saturate-share 0.05 --drop-share 0.05 --drop-quiet
 names=(paper_stream chain_stream)
 args_paper_stream=(stream --scene scenes/paper.toml --n 40 --seed 4 "${faults[@]}")
 args_chain_stream=(stream --scene scenes/piezo_chain.toml --n 20 --seed 4 "${faults[@]}")
+# Exported scenes: fw/replay/src/scenes/<name>.rs from scenes/<name>.toml.
+scenes=(paper piezo_chain)
 
 case "${1:-}" in
     "")
         for name in "${names[@]}"; do
             declare -n args="args_$name"
             cargo run --quiet -p host-sim -- "${args[@]}" --out "fw/data/$name"
+        done
+        for scene in "${scenes[@]}"; do
+            cargo run --quiet -p host-sim -- export --scene "scenes/$scene.toml" \
+                --out "fw/replay/src/scenes/$scene.rs"
         done
         ;;
     --check)
@@ -48,6 +56,18 @@ case "${1:-}" in
                     status=1
                 fi
             done
+        done
+        for scene in "${scenes[@]}"; do
+            shipped=fw/replay/src/scenes/$scene.rs
+            cargo run --quiet -p host-sim -- export --scene "scenes/$scene.toml" \
+                --out "$tmp/$scene.rs"
+            if cmp -s "$tmp/$scene.rs" "$shipped"; then
+                echo "$shipped: reproduced byte for byte by host-sim export"
+            else
+                echo "$shipped DIFFERS from what host-sim export makes now (fw/stream.sh regenerates it):" >&2
+                diff -u "$shipped" "$tmp/$scene.rs" >&2 || true
+                status=1
+            fi
         done
         exit "$status"
         ;;

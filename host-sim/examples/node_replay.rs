@@ -4,8 +4,9 @@
 //! prints, which `fw/ci.sh` compares with the emulated node's line by line, plus a `truth`
 //! line (host only: the verdicts against the stream's truth). Then the same for the chain
 //! scene's stream (`fw/data/chain_stream.*`, from `scenes/piezo_chain.toml`), every line
-//! after the prefix `chain `; the kernel scene the node builds for it must equal what
-//! host-sim makes of the scene file.
+//! after the prefix `chain `. The kernel scene the node builds for each stream
+//! (`fw/replay/src/scenes/`, written by `host-sim export`) must equal what host-sim makes of
+//! its scene file (`scenes/paper.toml`, `scenes/piezo_chain.toml`).
 //!
 //! Run: `cargo run -p host-sim --example node_replay`.
 
@@ -25,6 +26,7 @@ fn main() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let scene = coalshock_replay::build_scene::<DefaultBackend>()
         .unwrap_or_else(|e| fail(format!("scene {e:?}")));
+    same_as_file(&scene, &root.join("scenes/paper.toml"), "paper scene");
     replay(
         "",
         &root.join("fw/data/paper_stream"),
@@ -35,14 +37,7 @@ fn main() {
 
     let chain = coalshock_replay::build_chain_scene::<DefaultBackend>()
         .unwrap_or_else(|e| fail(format!("chain scene {e:?}")));
-    let file = root.join("scenes/piezo_chain.toml");
-    let from_file = host_sim::scene::load(&file)
-        .map_err(|e| format!("{e}"))
-        .and_then(|f| host_sim::convert::scene_to_kernel(&f).map_err(|e| format!("{e:?}")))
-        .unwrap_or_else(|e| fail(format!("chain scene file {e}")));
-    if from_file != chain {
-        fail("chain scene: the node's scene differs from scenes/piezo_chain.toml's".into());
-    }
+    same_as_file(&chain, &root.join("scenes/piezo_chain.toml"), "chain scene");
     replay(
         "chain ",
         &root.join("fw/data/chain_stream"),
@@ -50,6 +45,23 @@ fn main() {
         chain,
         false,
     );
+}
+
+/// The kernel scene the node builds (`fw/replay/src/scenes/`, written by `host-sim export`)
+/// must equal what host-sim makes of the scene file.
+fn same_as_file(node: &Scene<DEFAULT_CLASSES, DefaultBackend>, file: &std::path::Path, what: &str) {
+    let from_file = host_sim::scene::load(file)
+        .map_err(|e| format!("{e}"))
+        .and_then(|f| host_sim::convert::scene_to_kernel(&f).map_err(|e| format!("{e:?}")))
+        .unwrap_or_else(|e| fail(format!("{what} file {e}")));
+    if &from_file != node {
+        let name = file
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        fail(format!(
+            "{what}: the node's scene differs from scenes/{name}'s"
+        ));
+    }
 }
 
 /// The host replay of one stream: host-sim reads the `.bin` + `.truth.csv` pair at `stem` and

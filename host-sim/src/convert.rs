@@ -79,8 +79,35 @@ pub fn class_to_kernel(c: &ClassSpec) -> ParticleClass {
 /// The sensor chain the kernel inverts: `SensorChain::from_plate(f_s, M, S, noise, bits)`,
 /// i.e. `force_per_count_n = M / S` (N per count) and the ADC range of `bits`, with the beam
 /// modes and the accelerometer resonance as the kernel's `ChainDynamics` (offset and drift are
-/// the baseline's to follow). More modes than the kernel carries is [`ConvertError::Kernel`].
+/// the baseline's to follow), its equaliser designed with the default backend. More modes
+/// than the kernel carries is [`ConvertError::Kernel`].
 pub fn sensor_to_kernel(s: &SensorSpec) -> Result<SensorChain, ConvertError> {
+    sensor_to_kernel_in::<coalshock::math::DefaultBackend>(s)
+}
+
+/// [`sensor_to_kernel`] with math backend `M` for the equaliser's design. A rigid chain (no
+/// mode, no accelerometer) is left as `SensorChain::from_plate` makes it, undesigned, as the
+/// kernel's presets have it (a firmware with a rigid chain links no design code).
+pub fn sensor_to_kernel_in<M: Backend>(s: &SensorSpec) -> Result<SensorChain, ConvertError> {
+    let chain = SensorChain::from_plate(
+        s.sample_rate_hz as f32,
+        s.effective_mass_kg as f32,
+        s.counts_per_m_s2 as f32,
+        s.noise_rms_counts as f32,
+        s.adc_bits,
+    );
+    let dynamics = dynamics_to_kernel(s)?;
+    if dynamics.is_rigid() {
+        return Ok(chain);
+    }
+    chain
+        .with_dynamics_in::<M>(dynamics)
+        .map_err(ConvertError::Kernel)
+}
+
+/// The beam modes and accelerometer resonance of a sensor as the kernel's `ChainDynamics`
+/// (not designed). More modes than the kernel carries is [`ConvertError::Kernel`].
+pub fn dynamics_to_kernel(s: &SensorSpec) -> Result<ChainDynamics, ConvertError> {
     let mut dynamics = ChainDynamics::RIGID;
     for m in &s.beam_modes {
         dynamics = dynamics
@@ -97,15 +124,7 @@ pub fn sensor_to_kernel(s: &SensorSpec) -> Result<SensorChain, ConvertError> {
             damping_ratio: a.damping_ratio as f32,
         });
     }
-    Ok(SensorChain::from_plate(
-        s.sample_rate_hz as f32,
-        s.effective_mass_kg as f32,
-        s.counts_per_m_s2 as f32,
-        s.noise_rms_counts as f32,
-        s.adc_bits,
-    )
-    .with_dynamics(dynamics)
-    .map_err(ConvertError::Kernel)?)
+    Ok(dynamics)
 }
 
 /// The kernel's default `Settings` with the file's overrides applied.
@@ -163,7 +182,7 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
     Scene::new(
         material_to_kernel(&scene.plate.material()),
         &classes,
-        sensor_to_kernel(&scene.sensor)?,
+        sensor_to_kernel_in::<M>(&scene.sensor)?,
         calibrated_settings(scene)?,
     )
     .map_err(ConvertError::Kernel)

@@ -6,6 +6,7 @@ pub mod calibrate;
 pub mod convert;
 pub mod evaluate;
 mod events;
+pub mod export;
 pub mod hertz64;
 pub mod identify;
 pub mod impact;

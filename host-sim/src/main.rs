@@ -6,7 +6,8 @@
 //! - `host-sim evaluate`: the kernel scored on a scene against the Bayes limit (see
 //!   `host_sim::evaluate`, JSON fields in `FORMATS.md`);
 //! - `host-sim identify`: the beam's modes and the accelerometer's resonance estimated from a
-//!   recorded stream (see `host_sim::identify`), printed as a `[sensor]` table.
+//!   recorded stream (see `host_sim::identify`), printed as a `[sensor]` table;
+//! - `host-sim export`: a scene file as Rust source for a firmware (see `host_sim::export`).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -51,6 +52,9 @@ enum Command {
     /// Estimate the tail beam's modes (and the accelerometer's resonance) from a recorded
     /// stream of impacts; prints the scene's [sensor] table.
     Identify(IdentifyArgs),
+    /// Write a scene file as Rust source that a firmware includes: a function that builds the
+    /// kernel scene exactly as host-sim does (exact f32 literals).
+    Export(host_sim::export::ExportArgs),
 }
 
 /// Flags of `host-sim identify`.
@@ -265,6 +269,7 @@ fn main() -> Result<()> {
         Command::Evaluate(args) => run_evaluate(args),
         Command::Tradeoff(args) => host_sim::tradeoff::run(args),
         Command::Identify(args) => run_identify(args),
+        Command::Export(args) => host_sim::export::run(args),
     }
 }
 

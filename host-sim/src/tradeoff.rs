@@ -88,8 +88,10 @@ pub struct TradeoffArgs {
     /// Seed of every random draw (streams, Monte Carlo).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// The firmware check's `measures.txt` (`fw/measure.sh`). Default: `$FW_OUT/measures.txt`,
-    /// else `target/fw/measures.txt`; when absent, the figures of `fw/README.md` are used.
+    /// The firmware check's `measures.txt` (`fw/measure.sh`, run by `bash fw/ci.sh`). Default:
+    /// `$FW_OUT/measures.txt`, else `fw/measures.txt` under the cargo target directory
+    /// (`$CARGO_TARGET_DIR`, the one this binary was built in, or `target/`); the command fails
+    /// when there is none.
     #[arg(long)]
     pub fw_measures: Option<PathBuf>,
 }
@@ -124,7 +126,8 @@ pub struct TradeoffConfig {
     pub rate_timing_impacts: usize,
     /// Points per axis (`R` log-spaced, `u` linear) per class of the closed-form error grid.
     pub closed_form_points: usize,
-    /// Separability grid sizes (cells per side) to build the paper scene with.
+    /// Separability grid sizes (midpoint rows along `ln u`, `Settings::separability_grid`) to
+    /// build the paper scene with.
     pub grid_sizes: Vec<u16>,
     /// Cells per side of the f64 reference integral of the separability.
     pub reference_grid: usize,
@@ -208,7 +211,7 @@ pub struct M4Figures {
     /// Instructions of a whole pulse, trigger to verdict, mean (`insns_pulse_total_mean`),
     /// when measured.
     pub pulse_total: Option<f64>,
-    /// Instructions of building the paper scene at the default 48-cell grid
+    /// Instructions of building the paper scene at the default 48-row grid
     /// (`insns_scene_build`).
     pub scene_build: f64,
 }
@@ -216,7 +219,7 @@ pub struct M4Figures {
 /// The firmware's figures for both backends and where they come from.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FirmwareFigures {
-    /// `fw/README.md` or the `measures.txt` read.
+    /// The `measures.txt` read.
     pub source: String,
     /// The `libm` backend.
     pub libm: M4Figures,
@@ -225,31 +228,6 @@ pub struct FirmwareFigures {
 }
 
 impl FirmwareFigures {
-    /// The figures printed in `fw/README.md` ("Measured figures": release build, default
-    /// backend libm, stand-in stream of `fw/gen_stream.py`, 68 509 samples, 40 pulses):
-    /// libm quiet sample 81, classify 6 534, whole pulse 10 022, scene build 1 562 083
-    /// instructions; micromath quiet sample 75, classify 6 299, scene build 2 106 976 (its
-    /// whole-pulse figure is not printed there).
-    pub fn readme() -> Self {
-        Self {
-            source: "fw/README.md (Measured figures)".to_string(),
-            libm: M4Figures {
-                quiet_sample: 81.0,
-                quiet_block_sample: None,
-                classify: 6534.0,
-                pulse_total: Some(10_022.0),
-                scene_build: 1_562_083.0,
-            },
-            micromath: M4Figures {
-                quiet_sample: 75.0,
-                quiet_block_sample: None,
-                classify: 6299.0,
-                pulse_total: None,
-                scene_build: 2_106_976.0,
-            },
-        }
-    }
-
     /// Parses the firmware check's `measures.txt` (`key value` lines, `fw/measure.sh`): the
     /// `libm_` and `micromath_` keys `insns_quiet_sample_mean`, `insns_classify_mean`,
     /// `insns_scene_build`, and the optional `insns_quiet_block_sample_mean` and
@@ -283,24 +261,61 @@ impl FirmwareFigures {
         })
     }
 
-    /// The figures of `path` (an error if it cannot be read or lacks a key), else of
-    /// `$FW_OUT/measures.txt`, else of `target/fw/measures.txt` (relative to the working
-    /// directory), else [`Self::readme`]. A found file that lacks a key (for example one
-    /// being rewritten by a firmware run) is skipped with a warning on stderr.
+    /// Where the firmware check writes its measures when no file is given, in order:
+    /// `$FW_OUT/measures.txt` (`fw/measure.sh` writes there when `FW_OUT` is set), then
+    /// `fw/measures.txt` under `$CARGO_TARGET_DIR`, under the target directory this binary runs
+    /// from (`<target>/<profile>/host-sim`), and under `target/` of the working directory.
+    pub fn default_paths() -> Vec<PathBuf> {
+        let mut paths: Vec<PathBuf> = Vec::new();
+        if let Some(d) = std::env::var_os("FW_OUT") {
+            paths.push(PathBuf::from(d).join("measures.txt"));
+        }
+        if let Some(d) = std::env::var_os("CARGO_TARGET_DIR") {
+            paths.push(PathBuf::from(d).join("fw/measures.txt"));
+        }
+        if let Some(target) = std::env::current_exe()
+            .ok()
+            .and_then(|exe| Some(exe.parent()?.parent()?.to_path_buf()))
+        {
+            paths.push(target.join("fw/measures.txt"));
+        }
+        paths.push(PathBuf::from("target/fw/measures.txt"));
+        let mut unique = Vec::new();
+        for p in paths {
+            if !unique.contains(&p) {
+                unique.push(p);
+            }
+        }
+        unique
+    }
+
+    /// The figures of `path` (an error if it cannot be read or lacks a key), else of the first
+    /// of [`Self::default_paths`] that exists and parses (one that lacks a key, for example
+    /// one being rewritten by a firmware run, is skipped with a warning on stderr). With no
+    /// measures file at all it fails, naming the command that makes one: the firmware's
+    /// figures are measured, never assumed.
     pub fn load(path: Option<&Path>) -> Result<Self> {
-        let candidates: Vec<PathBuf> = match path {
-            Some(p) => vec![p.to_path_buf()],
-            None => std::env::var_os("FW_OUT")
-                .map(|d| PathBuf::from(d).join("measures.txt"))
-                .into_iter()
-                .chain([PathBuf::from("target/fw/measures.txt")])
-                .collect(),
-        };
-        for p in candidates {
+        match path {
+            Some(p) => Self::load_from(Some(p), vec![p.to_path_buf()]),
+            None => Self::load_from(None, Self::default_paths()),
+        }
+    }
+
+    fn load_from(path: Option<&Path>, candidates: Vec<PathBuf>) -> Result<Self> {
+        for p in &candidates {
             if p.is_file() {
-                let text = std::fs::read_to_string(&p)
+                let text = std::fs::read_to_string(p)
                     .with_context(|| format!("cannot read {}", p.display()))?;
                 match Self::parse_measures(&text, &p.display().to_string()) {
+                    // Named without the machine's directories in the table (a default path).
+                    Ok(f) if path.is_none() => {
+                        return Ok(Self {
+                            source: "the firmware check's measures file \
+                                     (`measures.txt` of `fw/measure.sh`)"
+                                .to_string(),
+                            ..f
+                        });
+                    }
                     Ok(f) => return Ok(f),
                     Err(e) if path.is_none() => eprintln!("warning: {e}; skipped"),
                     Err(e) => return Err(e),
@@ -310,7 +325,13 @@ impl FirmwareFigures {
         if let Some(p) = path {
             return Err(anyhow!("{}: no such file", p.display()));
         }
-        Ok(Self::readme())
+        let looked: Vec<String> = candidates.iter().map(|p| p.display().to_string()).collect();
+        Err(anyhow!(
+            "no firmware measures (the Cortex-M4F instruction counts of the table): looked for {}. \
+             Run `bash fw/ci.sh` (or `fw/measure.sh`; both need QEMU, which fw/install.sh \
+             installs) to measure the firmware, or pass --fw-measures FILE.",
+            looked.join(", ")
+        ))
     }
 
     fn of<M: Backend>(&self) -> &M4Figures {
@@ -402,8 +423,8 @@ pub struct GridRow {
     pub bayes_error_err: f64,
     /// `|overlap - reference|`.
     pub overlap_err: f64,
-    /// Cortex-M4F instructions of the build, estimated as the measured count at 48 cells
-    /// times this grid's host build time over the 48-cell one.
+    /// Cortex-M4F instructions of the build, estimated as the measured count at 48 rows
+    /// times this grid's host build time over the 48-row one.
     pub m4_build_insns_est: f64,
 }
 
@@ -1421,7 +1442,7 @@ pub fn render_table(t: &Tradeoff) -> String {
     for g in &t.grids {
         let _ = writeln!(
             s,
-            "| separability grid | {0} x {0} | {1} us / scene build; Scene {2} B, Monitor {3} B | ~{4} / scene build (est.) | bayes_error {5:.4} (err {6:.1e}), overlap {7:.4} (err {8:.1e}) | (build-time figure only) |",
+            "| separability grid | {0} rows | {1} us / scene build; Scene {2} B, Monitor {3} B | ~{4} / scene build (est.) | bayes_error {5:.4} (err {6:.1e}), overlap {7:.4} (err {8:.1e}) | (build-time figure only) |",
             g.grid,
             si(g.build_us),
             t.sizes.scene,
@@ -1670,12 +1691,33 @@ mod tests {
 
     #[test]
     fn m4_estimate_scales_the_in_pulse_part() {
-        let fw = FirmwareFigures::readme().libm;
+        let fw = M4Figures {
+            quiet_sample: 70.0,
+            quiet_block_sample: None,
+            classify: 4000.0,
+            pulse_total: Some(9000.0),
+            scene_build: 1000.0,
+        };
         let at = |fs| m4_instructions_per_second(&fw, fs, 100.0);
-        assert_eq!(at(100_000.0), 100_000.0 * 81.0 + 100.0 * 10_022.0);
+        assert_eq!(at(100_000.0), 100_000.0 * 70.0 + 100.0 * 9000.0);
         assert_eq!(
             at(200_000.0),
-            200_000.0 * 81.0 + 100.0 * (6534.0 + 2.0 * 3488.0)
+            200_000.0 * 70.0 + 100.0 * (4000.0 + 2.0 * 5000.0)
+        );
+    }
+
+    #[test]
+    fn missing_measures_name_the_command_to_run() {
+        let e = FirmwareFigures::load(Some(Path::new("no/such/measures.txt")))
+            .expect_err("no such file");
+        assert!(e.to_string().contains("no such file"), "{e}");
+        let e = FirmwareFigures::load_from(None, vec![PathBuf::from("no/such/measures.txt")])
+            .expect_err("nothing found");
+        assert!(e.to_string().contains("bash fw/ci.sh"), "{e}");
+        assert!(
+            FirmwareFigures::default_paths()
+                .iter()
+                .any(|p| p.ends_with("fw/measures.txt"))
         );
     }
 

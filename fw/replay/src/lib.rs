@@ -13,16 +13,23 @@
 //! `scenes/piezo_chain.toml` (a tail beam with three modes under a piezo accelerometer); it is
 //! [`CHAIN`] and its scene [`build_chain_scene`]. [`PAPER`] is the first stream in the same
 //! form.
+//!
+//! The scenes ([`scenes`]) are written by `host-sim export` from the scene files, so the node
+//! builds exactly the kernel scene host-sim builds from each file.
 #![no_std]
 
 pub mod front_end;
 
+/// The scenes the node runs, each made from its scene file by `host-sim export` (`fw/stream.sh`
+/// regenerates them; `fw/stream.sh --check` fails unless they are reproduced byte for byte).
+pub mod scenes {
+    pub mod paper;
+    pub mod piezo_chain;
+}
+
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
-use coalshock::{
-    Accelerometer, BeamMode, ChainDynamics, Counters, Material, ParticleClass, Range, Report,
-    Scene, SensorChain, Settings, Side, Speed, Verdict,
-};
+use coalshock::{Counters, ParticleClass, Report, Scene, Side, Verdict};
 
 /// The replayed stream: little-endian i16 samples, dropped samples left out.
 pub static STREAM: &[u8] = include_bytes!("../../data/paper_stream.bin");
@@ -222,44 +229,17 @@ pub fn inputs() -> impl Iterator<Item = Input> {
     PAPER.inputs()
 }
 
-/// The scene the node runs, with math backend `M`.
-#[inline(never)]
+/// The scene the node runs: the paper scene of `scenes/paper.toml` ([`scenes::paper`]), with
+/// math backend `M`.
 pub fn build_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
-    Scene::paper_for()
+    scenes::paper::scene()
 }
 
-/// The chain scene `scenes/piezo_chain.toml` with math backend `M`: the paper's classes,
-/// plate and sensor (100 kS/s, 50 kg, 30 counts per m/s^2, 4 counts of noise, 16-bit ADC)
-/// behind a tail beam with three modes (180 Hz, zeta 0.02, gain 0.1; 650 Hz, 0.01, 0.05;
-/// 2100 Hz, 0.02, 0.1) and a piezo accelerometer (35 kHz, zeta 0.02); default settings.
-/// host-sim's `node_replay` example checks that it equals what host-sim makes of the file.
-#[inline(never)]
+/// The chain scene of `scenes/piezo_chain.toml` ([`scenes::piezo_chain`]) with math backend
+/// `M`: the paper's classes, plate and sensor behind a tail beam with three modes and a piezo
+/// accelerometer.
 pub fn build_chain_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
-    let radius = Range::new(0.015, 0.04);
-    let speed = Speed::Uniform(Range::new(1.0, 5.0));
-    let classes = [
-        ParticleClass::new("coal", Material::COAL, radius, speed),
-        ParticleClass::new("gangue", Material::SANDSTONE, radius, speed),
-    ];
-    let mode = |frequency_hz, damping_ratio, gain| BeamMode {
-        frequency_hz,
-        damping_ratio,
-        gain,
-    };
-    let dynamics = ChainDynamics::RIGID
-        .with_mode(mode(180.0, 0.02, 0.1))?
-        .with_mode(mode(650.0, 0.01, 0.05))?
-        .with_mode(mode(2100.0, 0.02, 0.1))?
-        .with_accelerometer(Accelerometer {
-            frequency_hz: 35_000.0,
-            damping_ratio: 0.02,
-        });
-    Scene::new(
-        Material::CARBON_STEEL,
-        &classes,
-        SensorChain::from_plate(100_000.0, 50.0, 30.0, 4.0, 16).with_dynamics_in::<M>(dynamics)?,
-        Settings::default(),
-    )
+    scenes::piezo_chain::scene()
 }
 
 /// One `pulse` line, in integers so host and node print the same text.

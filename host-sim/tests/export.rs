@@ -1,0 +1,42 @@
+//! The node's scenes (`fw/replay/src/scenes/`) are what `host-sim export` writes from the
+//! shipped scene files, and compiled they build the kernel scene host-sim builds from each
+//! file (`fw/stream.sh --check` and the `node_replay` example check the same in CI).
+
+use coalshock::math::DefaultBackend;
+use host_sim::convert::scene_to_kernel;
+use host_sim::export::scene_source;
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+#[test]
+fn node_scenes_are_the_exported_scene_files() {
+    for name in ["paper", "piezo_chain"] {
+        let file = host_sim::scene::load(root().join(format!("scenes/{name}.toml"))).unwrap();
+        let text = scene_source(&file, &format!("scenes/{name}.toml")).unwrap();
+        let shipped =
+            std::fs::read_to_string(root().join(format!("fw/replay/src/scenes/{name}.rs")))
+                .unwrap();
+        assert_eq!(
+            text, shipped,
+            "fw/replay/src/scenes/{name}.rs: run fw/stream.sh"
+        );
+    }
+}
+
+#[test]
+fn compiled_node_scenes_equal_host_sim_scenes() {
+    let load = |name: &str| {
+        let file = host_sim::scene::load(root().join(format!("scenes/{name}.toml"))).unwrap();
+        scene_to_kernel(&file).unwrap()
+    };
+    assert_eq!(
+        coalshock_replay::scenes::paper::scene::<DefaultBackend>().unwrap(),
+        load("paper")
+    );
+    assert_eq!(
+        coalshock_replay::scenes::piezo_chain::scene::<DefaultBackend>().unwrap(),
+        load("piezo_chain")
+    );
+}
