@@ -4,6 +4,8 @@ use crate::classifier::{Measurement, Verdict};
 use crate::counters::Counters;
 use crate::detector::{Detection, Detector};
 use crate::equaliser::Equaliser;
+use crate::error::Error;
+use crate::flow::{FlowConfig, FlowMonitor, FlowStatus};
 use crate::math::{Backend, DefaultBackend};
 use crate::scene::{DEFAULT_CLASSES, Scene};
 
@@ -30,6 +32,10 @@ pub enum Event {
         /// Index of the sample that completed the stuck run.
         at_sample: u64,
     },
+    /// The flow after a pulse (only from a monitor built with [`Monitor::with_flow`]): the
+    /// gangue share estimate, its standard error and the close-window alarm. It follows the
+    /// pulse's own `Pulse` event.
+    Flow(FlowStatus),
 }
 
 /// Scene, detector and counters in one value of fixed size: the kernel as a node runs it.
@@ -39,6 +45,9 @@ pub struct Monitor<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend
     equaliser: Equaliser,
     detector: Detector<M>,
     counters: Counters<N>,
+    flow: Option<FlowMonitor<M>>,
+    /// A flow status not yet handed out by [`Monitor::take_flow_event`].
+    flow_fresh: bool,
 }
 
 /// Samples equalised at a time by [`Monitor::feed_slice`] (its stack buffer, 4 bytes each).
@@ -53,7 +62,47 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
             scene,
             detector,
             counters: Counters::default(),
+            flow: None,
+            flow_fresh: false,
         }
+    }
+
+    /// The monitor with a flow monitor ([`crate::flow`]) fed by every pulse: after each
+    /// `Pulse` event comes an [`Event::Flow`] (from [`Monitor::feed_slice`] directly; after
+    /// [`Monitor::feed`], [`Monitor::gap`] or [`Monitor::finish`] from
+    /// [`Monitor::take_flow_event`]). A monitor without it does no flow work at all.
+    ///
+    /// ```
+    /// use coalshock::{Monitor, Scene, flow::FlowConfig};
+    /// let scene: Scene = Scene::paper().unwrap();
+    /// let m = Monitor::new(scene).with_flow(FlowConfig::new(0.05, 0.5, 1e-5)).unwrap();
+    /// assert!(m.flow().is_some());
+    /// ```
+    pub fn with_flow(mut self, config: FlowConfig) -> Result<Self, Error> {
+        self.flow = Some(FlowMonitor::new(config, &self.scene)?);
+        Ok(self)
+    }
+
+    /// The flow monitor, if the monitor has one.
+    pub fn flow(&self) -> Option<&FlowMonitor<M>> {
+        self.flow.as_ref()
+    }
+
+    /// Starts a new round of the flow monitor (share to the background, alarm off).
+    pub fn reset_flow(&mut self) {
+        if let Some(f) = self.flow.as_mut() {
+            f.reset();
+        }
+        self.flow_fresh = false;
+    }
+
+    /// The `Flow` event of the last pulse, once (`None` without a flow monitor or when it was
+    /// taken already).
+    pub fn take_flow_event(&mut self) -> Option<Event> {
+        if !core::mem::take(&mut self.flow_fresh) {
+            return None;
+        }
+        self.flow.as_ref().map(|f| Event::Flow(f.status()))
     }
 
     /// Feeds one ADC sample; returns an event when a pulse ends or the sensor is stuck.
@@ -93,6 +142,9 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
             };
             if let Some(d) = self.detector.feed(s.into()) {
                 on_event(self.handle(d));
+                if let Some(e) = self.take_flow_event() {
+                    on_event(e);
+                }
             }
             rest = tail;
         }
@@ -119,6 +171,9 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
             };
             if let Some(d) = self.detector.feed_value(s.into(), v) {
                 on_event(self.handle(d));
+                if let Some(e) = self.take_flow_event() {
+                    on_event(e);
+                }
             }
             at += 1;
         }
@@ -165,9 +220,18 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
                 // The equaliser's output lags the ADC by its delay.
                 let at_sample =
                     at_sample.saturating_sub(self.equaliser.design().delay_samples() as u64);
-                let (verdict, measurement) = match outcome {
-                    Ok(m) => (self.scene.classify(&m), Some(m)),
-                    Err(r) => (Verdict::Rejected(r), None),
+                let (verdict, measurement) = match (outcome, self.flow.as_mut()) {
+                    (Ok(m), None) => (self.scene.classify(&m), Some(m)),
+                    (Err(r), None) => (Verdict::Rejected(r), None),
+                    (outcome, Some(flow)) => {
+                        let (verdict, lls) = match outcome {
+                            Ok(m) => self.scene.classify_with_likelihoods(&m),
+                            Err(r) => (Verdict::Rejected(r), None),
+                        };
+                        flow.record(&verdict, lls.as_ref().map(|l| l.as_slice()));
+                        self.flow_fresh = true;
+                        (verdict, outcome.ok())
+                    }
                 };
                 self.counters.record(&verdict);
                 Event::Pulse(Report {

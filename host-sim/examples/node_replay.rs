@@ -69,6 +69,12 @@ fn main() {
                 );
             }
             Event::Stuck { at_sample } => println!("stuck at={at_sample}"),
+            Event::Flow(f) => println!(
+                "flow pulses={} share_ppm={} alarm={}",
+                f.pulses,
+                (f.share * 1e6) as u32,
+                f.alarm
+            ),
         }
     }
     let c = monitor.counters();
@@ -89,7 +95,7 @@ fn main() {
         .iter()
         .filter_map(|e| match e {
             Event::Pulse(r) => Some(*r),
-            Event::Stuck { .. } => None,
+            Event::Stuck { .. } | Event::Flow(_) => None,
         })
         .collect();
     let m = match_truth(&reports, &stream.truth, 3);

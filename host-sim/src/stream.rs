@@ -853,7 +853,7 @@ pub fn replay<const N: usize, M: Backend>(
         .into_iter()
         .filter_map(|e| match e {
             Event::Pulse(r) => Some(r),
-            Event::Stuck { .. } => None,
+            Event::Stuck { .. } | Event::Flow(_) => None,
         })
         .collect()
 }

@@ -411,6 +411,12 @@ fn log_event<M: Backend>(n: u32, e: &Event, scene: &Scene<DEFAULT_CLASSES, M>) {
             );
         }
         Event::Stuck { at_sample } => defmt::println!("stuck at={=u64}", at_sample),
+        Event::Flow(f) => defmt::println!(
+            "flow pulses={=u32} share_ppm={=u32} alarm={=bool}",
+            f.pulses,
+            (f.share * 1e6) as u32,
+            f.alarm
+        ),
     }
 }
 
