@@ -158,6 +158,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
     /// ```
+    #[inline(never)]
     pub fn classify_with_likelihoods(&self, m: &Measurement) -> (Verdict, Option<[f32; N]>) {
         let ok = |v: f32| v.is_finite() && v > 0.0;
         let implausible = (Verdict::Rejected(RejectReason::Implausible), None);

@@ -26,8 +26,8 @@
 //!   `W2 = sum (1 - lambda)^(2k)` over the pulses used (a weighted estimator's variance),
 //!   at most 0.5.
 //!
-//! Fixed memory (a few dozen bytes), no heap; one `exp`, one `ln` and one `sqrt` per pulse in a
-//! two-class scene (fw/budgets.txt: `insns_flow_update_max`).
+//! Fixed memory (a few dozen bytes), no heap; one `exp` and one `ln` per pulse in a two-class
+//! scene, the square root by three Newton steps (fw/budgets.txt: `insns_flow_update_max`).
 
 use crate::classifier::Verdict;
 use crate::error::Error;
@@ -40,6 +40,70 @@ pub const MAX_LN_RATIO: f32 = 30.0;
 
 /// The share estimate is kept inside `[SHARE_FLOOR, 1 - SHARE_FLOOR]`.
 pub const SHARE_FLOOR: f32 = 1e-3;
+
+/// What a [`crate::Monitor`] feeds each pulse to besides the classifier: [`NoFlow`] (nothing;
+/// the monitor then has no flow code at all) or a [`FlowMonitor`].
+pub trait FlowSlot<M: Backend>: Clone + core::fmt::Debug {
+    /// Whether pulses are fed to it (a constant, so a monitor without flow compiles none).
+    const ON: bool;
+    /// One pulse's verdict and class log-likelihoods (see [`FlowMonitor::record`]).
+    fn record(&mut self, verdict: &Verdict, lls: Option<&[f32]>);
+    /// The status after the last recorded pulse, once.
+    fn take(&mut self) -> Option<FlowStatus>;
+    /// Starts a new round.
+    fn reset(&mut self);
+}
+
+/// No flow monitor.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NoFlow;
+
+impl<M: Backend> FlowSlot<M> for NoFlow {
+    const ON: bool = false;
+    fn record(&mut self, _: &Verdict, _: Option<&[f32]>) {}
+    fn take(&mut self) -> Option<FlowStatus> {
+        None
+    }
+    fn reset(&mut self) {}
+}
+
+impl<M: Backend> FlowSlot<M> for FlowMonitor<M> {
+    const ON: bool = true;
+    fn record(&mut self, verdict: &Verdict, lls: Option<&[f32]>) {
+        FlowMonitor::record(self, verdict, lls);
+    }
+    fn take(&mut self) -> Option<FlowStatus> {
+        core::mem::take(&mut self.fresh).then(|| self.status())
+    }
+    fn reset(&mut self) {
+        FlowMonitor::reset(self);
+    }
+}
+
+/// `v` cut to `[lo, hi]` by comparisons (`f32::max`/`min` are library calls on the
+/// Cortex-M; `v` is not NaN here).
+#[inline(always)]
+fn cut(v: f32, lo: f32, hi: f32) -> f32 {
+    if v < lo {
+        lo
+    } else if v > hi {
+        hi
+    } else {
+        v
+    }
+}
+
+/// `sqrt(x)` for `x` in `(0, 0.25]` (a variance of a share) from the exponent-halving guess
+/// and three Newton steps `y <- (y + x / y) / 2`: relative error below `1e-6`, a few
+/// instructions with the FPU where a library `sqrtf` costs about a hundred.
+fn sqrt_newton(x: f32) -> f32 {
+    let mut y = f32::from_bits((x.to_bits() >> 1) + 0x1FBD_1DF5);
+    for _ in 0..3 {
+        y = 0.5 * (y + x / y);
+    }
+    y
+}
 
 /// What the user states: the background share, the level to close at, the false-alarm rate,
 /// the memory of the share estimate and which classes are gangue.
@@ -145,7 +209,12 @@ pub struct FlowMonitor<M: Backend = DefaultBackend> {
     ln_prior_coal: f32,
     ln_priors: [f32; MAX_CLASSES],
     classes: u8,
+    /// `(gangue, coal)` class indices when each group is one class (the ratio is then a
+    /// difference of two log-likelihoods).
+    pair: Option<(u8, u8)>,
     state: FlowState,
+    /// A status not yet taken ([`FlowSlot::take`]).
+    fresh: bool,
     backend: M,
 }
 
@@ -211,9 +280,15 @@ impl<M: Backend> FlowMonitor<M> {
             ln_prior_coal: 0.0,
             ln_priors,
             classes: n as u8,
+            pair: None,
             state: FlowState::new(config.pre_share),
+            fresh: false,
             backend: M::default(),
         };
+        if mask.count_ones() == 1 && n == 2 {
+            let g = mask.trailing_zeros() as u8;
+            this.pair = Some((g, 1 - g));
+        }
         let zeros = [0.0f32; MAX_CLASSES];
         let (g, c) = this.group_ln_likelihoods(&zeros);
         this.ln_prior_gangue = g;
@@ -234,32 +309,36 @@ impl<M: Backend> FlowMonitor<M> {
     /// Starts a new round: share back to `pre_share`, statistic to 0, alarm off, counts to 0.
     pub fn reset(&mut self) {
         self.state = FlowState::new(self.config.pre_share);
+        self.fresh = false;
     }
 
     /// `(ln sum_G prior_j L_j, ln sum_C prior_j L_j)` by log-sum-exp over each group.
     fn group_ln_likelihoods(&self, lls: &[f32]) -> (f32, f32) {
-        let mut max = [f32::NEG_INFINITY; 2];
-        let groups = || {
-            lls.iter()
-                .zip(self.ln_priors.iter())
-                .take(self.classes as usize)
-                .enumerate()
-                .map(|(i, (&ll, &lp))| (((self.config.gangue_classes >> i) & 1) as usize, ll + lp))
-        };
-        for (g, v) in groups() {
-            if let Some(m) = max.get_mut(g) {
-                *m = m.max(v);
+        let n = (self.classes as usize).min(lls.len());
+        let terms = lls.iter().zip(self.ln_priors.iter()).take(n);
+        let group = |i: usize| ((self.config.gangue_classes >> i) & 1) == 1;
+        let (mut max_g, mut max_c) = (f32::NEG_INFINITY, f32::NEG_INFINITY);
+        for (i, (&ll, &lp)) in terms.clone().enumerate() {
+            let m = if group(i) { &mut max_g } else { &mut max_c };
+            if ll + lp > *m {
+                *m = ll + lp;
             }
         }
-        let mut sum = [0.0f32; 2];
-        for (g, v) in groups() {
-            if let (Some(s), Some(&m)) = (sum.get_mut(g), max.get(g)) {
-                *s += if v == m { 1.0 } else { M::exp(v - m) };
-            }
+        let (mut sum_g, mut sum_c) = (0.0f32, 0.0f32);
+        for (i, (&ll, &lp)) in terms.enumerate() {
+            let (s, m) = if group(i) {
+                (&mut sum_g, max_g)
+            } else {
+                (&mut sum_c, max_c)
+            };
+            *s += if ll + lp == m {
+                1.0
+            } else {
+                M::exp(ll + lp - m)
+            };
         }
         let lse = |m: f32, s: f32| if s == 1.0 { m } else { m + M::ln(s) };
-        let [c, g] = [lse(max[0], sum[0]), lse(max[1], sum[1])];
-        (g, c)
+        (lse(max_g, sum_g), lse(max_c, sum_c))
     }
 
     /// `ln(p_G / p_C)` of a pulse with class log-likelihoods `lls` (element `c` for class
@@ -274,12 +353,18 @@ impl<M: Backend> FlowMonitor<M> {
     /// assert_eq!(flow.ln_ratio(&[f32::NEG_INFINITY; 2]), None);
     /// ```
     pub fn ln_ratio(&self, lls: &[f32]) -> Option<f32> {
-        let (g, c) = self.group_ln_likelihoods(lls);
+        let (g, c) = match self.pair {
+            Some((g, c)) => (
+                lls.get(g as usize).copied().unwrap_or(f32::NEG_INFINITY),
+                lls.get(c as usize).copied().unwrap_or(f32::NEG_INFINITY),
+            ),
+            None => self.group_ln_likelihoods(lls),
+        };
         let d = (g - self.ln_prior_gangue) - (c - self.ln_prior_coal);
         if d.is_nan() || (g == f32::NEG_INFINITY && c == f32::NEG_INFINITY) {
             return None;
         }
-        Some(d.max(-MAX_LN_RATIO).min(MAX_LN_RATIO))
+        Some(cut(d, -MAX_LN_RATIO, MAX_LN_RATIO))
     }
 
     /// The CUSUM increment of one pulse with likelihood ratio `r = e^ln_ratio`:
@@ -303,6 +388,7 @@ impl<M: Backend> FlowMonitor<M> {
     /// with a finite ratio updates the share and the CUSUM ([`FlowMonitor::update`]); anything
     /// else is left out and counted. Returns whether the pulse was used.
     pub fn record(&mut self, verdict: &Verdict, lls: Option<&[f32]>) -> bool {
+        self.fresh = true;
         let ratio = match (verdict, lls) {
             (Verdict::Class { .. } | Verdict::Ambiguous { .. }, Some(l)) => self.ln_ratio(l),
             _ => None,
@@ -321,12 +407,18 @@ impl<M: Backend> FlowMonitor<M> {
 
     /// One used pulse with `ln(p_G / p_C) = ln_ratio` (see the module docs for the formulas).
     pub fn update(&mut self, ln_ratio: f32) {
-        let d = ln_ratio.max(-MAX_LN_RATIO).min(MAX_LN_RATIO);
+        // Not NaN: a NaN ratio counts as no information (0).
+        let d = if ln_ratio.is_nan() {
+            0.0
+        } else {
+            cut(ln_ratio, -MAX_LN_RATIO, MAX_LN_RATIO)
+        };
         let r = M::exp(d);
         let (p0, p1) = (self.config.pre_share, self.config.level);
         let s = &mut self.state;
         let step = M::ln((p1 * r + (1.0 - p1)) / (p0 * r + (1.0 - p0)));
-        s.cusum = (s.cusum + step).max(0.0);
+        let cusum = s.cusum + step;
+        s.cusum = if cusum > 0.0 { cusum } else { 0.0 };
         s.alarm |= s.cusum >= self.threshold;
         let mix = s.share * r + (1.0 - s.share);
         let g = (r - 1.0) / mix;
@@ -336,7 +428,7 @@ impl<M: Backend> FlowMonitor<M> {
         s.weight = k * s.weight + 1.0;
         s.weight2 = k * k * s.weight2 + 1.0;
         let share = s.share + (1.0 - k) * (w - s.share);
-        s.share = share.max(SHARE_FLOOR).min(1.0 - SHARE_FLOOR);
+        s.share = cut(share, SHARE_FLOOR, 1.0 - SHARE_FLOOR);
         s.pulses = s.pulses.saturating_add(1);
     }
 
@@ -349,8 +441,8 @@ impl<M: Backend> FlowMonitor<M> {
     pub fn status(&self) -> FlowStatus {
         let s = &self.state;
         let var = s.weight2 / (s.weight * s.information);
-        let std_error = if var.is_finite() && var < 0.25 {
-            M::sqrt(var)
+        let std_error = if var > 0.0 && var < 0.25 {
+            sqrt_newton(var)
         } else {
             0.5
         };
@@ -381,6 +473,16 @@ mod tests {
 
     fn monitor(config: FlowConfig) -> FlowMonitor<Libm> {
         FlowMonitor::new(config, &paper()).unwrap_or_else(|_| unreachable!())
+    }
+
+    #[test]
+    fn newton_square_root_is_within_a_millionth() {
+        let mut x = 1e-12f32;
+        while x <= 0.25 {
+            let rel = (sqrt_newton(x) as f64 / (x as f64).sqrt() - 1.0).abs();
+            assert!(rel < 1e-6, "{x}: {rel}");
+            x *= 1.07;
+        }
     }
 
     #[test]

@@ -29,7 +29,7 @@ pub use detector::{Detection, Detector};
 pub use envelope::{Envelope, Range, Side};
 pub use equaliser::{Accelerometer, BeamMode, ChainDynamics, Equaliser, EqualiserDesign};
 pub use error::Error;
-pub use flow::{FlowConfig, FlowMonitor, FlowStatus};
+pub use flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 pub use material::Material;
 pub use monitor::{Event, Monitor, Report};
 pub use scene::{ContactCalibration, ParticleClass, Scene, SensorChain, Settings, Speed};

@@ -5,7 +5,7 @@ use crate::counters::Counters;
 use crate::detector::{Detection, Detector};
 use crate::equaliser::Equaliser;
 use crate::error::Error;
-use crate::flow::{FlowConfig, FlowMonitor, FlowStatus};
+use crate::flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 use crate::math::{Backend, DefaultBackend};
 use crate::scene::{DEFAULT_CLASSES, Scene};
 
@@ -38,22 +38,26 @@ pub enum Event {
     Flow(FlowStatus),
 }
 
-/// Scene, detector and counters in one value of fixed size: the kernel as a node runs it.
+/// Scene, detector and counters in one value of fixed size: the kernel as a node runs it;
+/// `F` is what else each pulse feeds: nothing ([`NoFlow`], the default: no flow code at all)
+/// or a [`FlowMonitor`] ([`Monitor::with_flow`]).
 #[derive(Debug, Clone)]
-pub struct Monitor<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> {
+pub struct Monitor<
+    const N: usize = DEFAULT_CLASSES,
+    M: Backend = DefaultBackend,
+    F: FlowSlot<M> = NoFlow,
+> {
     scene: Scene<N, M>,
     equaliser: Equaliser,
     detector: Detector<M>,
     counters: Counters<N>,
-    flow: Option<FlowMonitor<M>>,
-    /// A flow status not yet handed out by [`Monitor::take_flow_event`].
-    flow_fresh: bool,
+    flow: F,
 }
 
 /// Samples equalised at a time by [`Monitor::feed_slice`] (its stack buffer, 4 bytes each).
 pub const EQUALISE_BLOCK: usize = 32;
 
-impl<const N: usize, M: Backend> Monitor<N, M> {
+impl<const N: usize, M: Backend> Monitor<N, M, NoFlow> {
     /// A monitor for a built scene.
     pub fn new(scene: Scene<N, M>) -> Self {
         let detector = Detector::new(&scene);
@@ -62,8 +66,7 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
             scene,
             detector,
             counters: Counters::default(),
-            flow: None,
-            flow_fresh: false,
+            flow: NoFlow,
         }
     }
 
@@ -76,33 +79,35 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
     /// use coalshock::{Monitor, Scene, flow::FlowConfig};
     /// let scene: Scene = Scene::paper().unwrap();
     /// let m = Monitor::new(scene).with_flow(FlowConfig::new(0.05, 0.5, 1e-5)).unwrap();
-    /// assert!(m.flow().is_some());
+    /// assert!(m.flow().threshold() > 11.5);
     /// ```
-    pub fn with_flow(mut self, config: FlowConfig) -> Result<Self, Error> {
-        self.flow = Some(FlowMonitor::new(config, &self.scene)?);
-        Ok(self)
+    pub fn with_flow(self, config: FlowConfig) -> Result<Monitor<N, M, FlowMonitor<M>>, Error> {
+        let flow = FlowMonitor::new(config, &self.scene)?;
+        Ok(Monitor {
+            scene: self.scene,
+            equaliser: self.equaliser,
+            detector: self.detector,
+            counters: self.counters,
+            flow,
+        })
     }
+}
 
-    /// The flow monitor, if the monitor has one.
-    pub fn flow(&self) -> Option<&FlowMonitor<M>> {
-        self.flow.as_ref()
+impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
+    /// The flow monitor ([`NoFlow`] for a monitor without one).
+    pub fn flow(&self) -> &F {
+        &self.flow
     }
 
     /// Starts a new round of the flow monitor (share to the background, alarm off).
     pub fn reset_flow(&mut self) {
-        if let Some(f) = self.flow.as_mut() {
-            f.reset();
-        }
-        self.flow_fresh = false;
+        self.flow.reset();
     }
 
     /// The `Flow` event of the last pulse, once (`None` without a flow monitor or when it was
     /// taken already).
     pub fn take_flow_event(&mut self) -> Option<Event> {
-        if !core::mem::take(&mut self.flow_fresh) {
-            return None;
-        }
-        self.flow.as_ref().map(|f| Event::Flow(f.status()))
+        self.flow.take().map(Event::Flow)
     }
 
     /// Feeds one ADC sample; returns an event when a pulse ends or the sensor is stuck.
@@ -220,17 +225,18 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
                 // The equaliser's output lags the ADC by its delay.
                 let at_sample =
                     at_sample.saturating_sub(self.equaliser.design().delay_samples() as u64);
-                let (verdict, measurement) = match (outcome, self.flow.as_mut()) {
-                    (Ok(m), None) => (self.scene.classify(&m), Some(m)),
-                    (Err(r), None) => (Verdict::Rejected(r), None),
-                    (outcome, Some(flow)) => {
-                        let (verdict, lls) = match outcome {
-                            Ok(m) => self.scene.classify_with_likelihoods(&m),
-                            Err(r) => (Verdict::Rejected(r), None),
-                        };
-                        flow.record(&verdict, lls.as_ref().map(|l| l.as_slice()));
-                        self.flow_fresh = true;
-                        (verdict, outcome.ok())
+                let (verdict, measurement) = if F::ON {
+                    let (verdict, lls) = match outcome {
+                        Ok(m) => self.scene.classify_with_likelihoods(&m),
+                        Err(r) => (Verdict::Rejected(r), None),
+                    };
+                    self.flow
+                        .record(&verdict, lls.as_ref().map(|l| l.as_slice()));
+                    (verdict, outcome.ok())
+                } else {
+                    match outcome {
+                        Ok(m) => (self.scene.classify(&m), Some(m)),
+                        Err(r) => (Verdict::Rejected(r), None),
                     }
                 };
                 self.counters.record(&verdict);

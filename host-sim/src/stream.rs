@@ -17,7 +17,7 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use coalshock::math::Backend;
-use coalshock::{Event, Monitor, Report};
+use coalshock::{Event, FlowSlot, Monitor, Report};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -926,9 +926,9 @@ fn simulate_pulse(
 
 /// Feeds a stream to a monitor: the stored samples in blocks (`Monitor::feed_slice`),
 /// `Monitor::gap` at every recorded gap, `Monitor::finish` at the end. Returns every event.
-pub fn replay_events<const N: usize, M: Backend>(
+pub fn replay_events<const N: usize, M: Backend, F: FlowSlot<M>>(
     stream: &Stream,
-    monitor: &mut Monitor<N, M>,
+    monitor: &mut Monitor<N, M, F>,
 ) -> Vec<Event> {
     let mut out = Vec::new();
     let mut pos = 0usize;

@@ -37,6 +37,7 @@
 use coalshock::RejectReason;
 use coalshock::math::{Backend, DefaultBackend, Libm, Micromath};
 use coalshock::scene::DEFAULT_CLASSES;
+use coalshock::flow::{FlowConfig, FlowMonitor, FlowStatus};
 use coalshock::{Counters, Detector, Event, Monitor, Scene, Verdict};
 use coalshock_fw::exit;
 use coalshock_node_rt as rt;
@@ -212,6 +213,35 @@ fn gap<M: Backend>(m: &mut Monitor<DEFAULT_CLASSES, M>, lost: u32) -> Option<Eve
 #[inline(never)]
 fn finish<M: Backend>(m: &mut Monitor<DEFAULT_CLASSES, M>) -> Option<Event> {
     m.finish()
+}
+
+/// One pulse through the flow monitor, as `Monitor::with_flow` does it after classifying:
+/// `FlowMonitor::record`, then the status its `Flow` event carries (timed alone).
+#[inline(never)]
+fn flow_record<M: Backend>(
+    flow: &mut FlowMonitor<M>,
+    verdict: &Verdict,
+    lls: Option<&[f32]>,
+) -> FlowStatus {
+    flow.record(black_box(verdict), black_box(lls));
+    flow.status()
+}
+
+/// Times the flow monitor's work on one reported pulse: its class log-likelihoods computed
+/// first (untimed), then [`flow_record`].
+fn time_flow<M: Backend>(
+    flow: &mut FlowMonitor<M>,
+    scene: &Scene<DEFAULT_CLASSES, M>,
+    e: &Event,
+) -> Option<u32> {
+    let Event::Pulse(r) = e else { return None };
+    let (verdict, lls) = match r.measurement {
+        Some(m) => scene.classify_with_likelihoods(&m),
+        None => (r.verdict, None),
+    };
+    let t0 = now();
+    black_box(flow_record(flow, &verdict, lls.as_ref().map(|l| l.as_slice())));
+    Some(elapsed(t0, now()))
 }
 
 #[inline(never)]
@@ -466,12 +496,11 @@ fn main() -> ! {
     let default = if default_is_libm { &libm } else { &micro };
 
     // Logging pass with the default backend: one line per event, then the counters.
-    let mut same = true;
-    if default_is_libm {
-        same &= log_pass(Monitor::new(libm_scene), &default.counters);
+    let (same, flow) = if default_is_libm {
+        log_pass(Monitor::new(libm_scene), &default.counters)
     } else {
-        same &= log_pass(Monitor::new(micro_scene), &default.counters);
-    }
+        log_pass(Monitor::new(micro_scene), &default.counters)
+    };
 
     let measure = |key: &str, value: u64| defmt::println!("measure {=str} {=u64}", key, value);
     defmt::println!("backend {=str}", DefaultBackend::NAME);
@@ -492,6 +521,9 @@ fn main() -> ! {
         core::mem::size_of::<Counters<DEFAULT_CLASSES>>() as u64,
     );
     report("", default, &clock);
+    measure("flow_pulses", flow.n);
+    measure("insns_flow_update_mean", flow.mean(&clock));
+    measure("insns_flow_update_max", flow.max(&clock));
     report("libm_", &libm, &clock);
     report("micromath_", &micro, &clock);
     let lowest = libm.lowest.min(micro.lowest).min(rt::lowest_touched());
@@ -512,7 +544,11 @@ fn main() -> ! {
 fn log_pass<M: Backend>(
     mut monitor: Monitor<DEFAULT_CLASSES, M>,
     measured: &Counters<DEFAULT_CLASSES>,
-) -> bool {
+) -> (bool, Stat) {
+    // The flow monitor's cost per pulse, timed on every pulse of this pass (the caving
+    // setting: background 5 %, level 50 %, one false alarm per 10^5 impacts).
+    let mut flow_stat = Stat::default();
+    let mut flow = FlowMonitor::new(FlowConfig::new(0.05, 0.5, 1e-5), monitor.scene()).ok();
     let mut n = 0u32;
     for input in inputs() {
         let event = match input {
@@ -521,12 +557,18 @@ fn log_pass<M: Backend>(
         };
         if let Some(e) = event {
             log_event(n, &e, monitor.scene());
+            if let Some(t) = flow.as_mut().and_then(|f| time_flow(f, monitor.scene(), &e)) {
+                flow_stat.add(t);
+            }
             n += 1;
         }
     }
     if let Some(e) = monitor.finish() {
         log_event(n, &e, monitor.scene());
+        if let Some(t) = flow.as_mut().and_then(|f| time_flow(f, monitor.scene(), &e)) {
+            flow_stat.add(t);
+        }
     }
     log_counters(&monitor);
-    monitor.counters() == measured
+    (monitor.counters() == measured, flow_stat)
 }
