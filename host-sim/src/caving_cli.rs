@@ -301,3 +301,42 @@ pub fn write_plots(r: &CavingReport, dir: &Path) -> Result<()> {
     std::fs::write(&path, csv).with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Debug, Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: CavingArgs,
+    }
+
+    #[test]
+    fn flags_override_the_scene_which_overrides_the_defaults() {
+        let spec = CavingSpec {
+            pre_share: Some(0.1),
+            post_share: Some(0.3),
+            rate_hz: Some(5.0),
+            profile: Some(Profile::Ramp),
+            ..CavingSpec::default()
+        };
+        let cli = Cli::try_parse_from(["caving", "--post-share", "0.4", "--rounds", "3"])
+            .expect("parses");
+        let o = cli.args.options(&spec);
+        assert_eq!(o.pre_share, 0.1);
+        assert_eq!(o.post_share, 0.4);
+        assert_eq!(o.level, 0.4, "the level defaults to the post-change share");
+        assert_eq!(o.rate_hz, 5.0);
+        assert_eq!(o.profile, Profile::Ramp);
+        assert_eq!(o.false_alarm_rate, 1e-5);
+        assert_eq!(o.rounds, 3);
+        let cli = Cli::try_parse_from(["caving", "--rate", "-1"]).expect("parses");
+        let err = cli
+            .args
+            .options(&CavingSpec::default())
+            .validate(&crate::scene::SceneFile::paper());
+        assert!(format!("{:?}", err).contains("rate_hz"), "{err:?}");
+    }
+}

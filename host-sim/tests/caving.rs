@@ -163,3 +163,21 @@ fn json_carries_the_contract_fields() {
     // The clairvoyant draws exactly the coal before the crossing and nothing after it.
     assert_eq!(report.clairvoyant.recovery_rate, 1.0);
 }
+
+#[test]
+fn a_scene_file_may_carry_the_change() {
+    let text = format!(
+        "{}\n[caving]\npre_share = 0.02\npost_share = 0.3\nprofile = \"ramp\"\nramp_impacts = 50\n",
+        SceneFile::paper().to_toml_string().expect("toml")
+    );
+    let path = std::env::temp_dir().join(format!("caving_scene_{}.toml", std::process::id()));
+    std::fs::write(&path, text).expect("write");
+    let (scene, spec) = host_sim::caving::load_scene(&path).expect("loads");
+    std::fs::remove_file(&path).ok();
+    assert_eq!(scene, SceneFile::paper());
+    assert_eq!(spec.pre_share, Some(0.02));
+    assert_eq!(spec.post_share, Some(0.3));
+    assert_eq!(spec.profile, Some(Profile::Ramp));
+    assert_eq!(spec.ramp_impacts, Some(50));
+    assert_eq!(spec.level, None);
+}
