@@ -207,8 +207,8 @@ pub fn write_plots(r: &CavingReport, dir: &Path) -> Result<()> {
     let n = t.true_share.len() as f64;
     let mut curves = vec![
         curve("share estimate", share, BLUE, Stroke::Solid),
-        curve("estimate +- 2 standard errors", hi, BLUE, Stroke::Dashed),
-        curve("", lo, BLUE, Stroke::Dashed),
+        curve("estimate + 2 standard errors", hi, BLUE, Stroke::Dashed),
+        curve("estimate - 2 standard errors", lo, BLUE, Stroke::Dashed),
         curve("true share", truth, GREY, Stroke::Solid),
         curve(
             "level",
