@@ -1,4 +1,5 @@
-//! The whole node pipeline: scene + detector + classifier + counters, fed one sample at a time.
+//! The whole node pipeline: scene + detector + classifier + counters (+ an optional flow
+//! monitor), fed one sample at a time.
 
 use crate::classifier::{Measurement, Verdict};
 use crate::counters::Counters;
