@@ -141,13 +141,33 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// `Ambiguous`. Never panics: a non-finite or non-positive measurement is
     /// `Rejected(Implausible)`.
     pub fn classify(&self, m: &Measurement) -> Verdict {
+        self.classify_with_likelihoods(m).0
+    }
+
+    /// [`Scene::classify`], and with it the class log-likelihoods it weighed: element `c` is
+    /// `ln L_c` of class `c` (without its prior; `-inf` where f32 rounds the likelihood to
+    /// zero; classes past [`Scene::classes`] are `-inf`), or `None` when the measurement is
+    /// `Rejected(Implausible)`. The verdict is exactly [`Scene::classify`]'s.
+    ///
+    /// ```
+    /// use coalshock::{Measurement, Scene, Verdict};
+    /// let scene: Scene = Scene::paper().unwrap();
+    /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
+    ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01 };
+    /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
+    /// assert_eq!(verdict, scene.classify(&m));
+    /// assert!(lls.is_some());
+    /// ```
+    #[inline(never)]
+    pub fn classify_with_likelihoods(&self, m: &Measurement) -> (Verdict, Option<[f32; N]>) {
         let ok = |v: f32| v.is_finite() && v > 0.0;
+        let implausible = (Verdict::Rejected(RejectReason::Implausible), None);
         if !ok(m.peak_force_n) || !ok(m.duration_s) {
-            return Verdict::Rejected(RejectReason::Implausible);
+            return implausible;
         }
         let m = &self.hertz_equivalent(m);
         if !ok(m.peak_force_n) || !ok(m.duration_s) {
-            return Verdict::Rejected(RejectReason::Implausible);
+            return implausible;
         }
         let s = self.settings();
         let model2 = s.model_sigma * s.model_sigma;
@@ -164,11 +184,13 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let mut best = 0u8;
         let mut best_ll = f32::NEG_INFINITY;
         let mut lls = [f32::NEG_INFINITY; crate::scene::MAX_CLASSES];
-        for (i, ((env, lp), slot)) in self
+        let mut class_lls = [f32::NEG_INFINITY; N];
+        for (i, (((env, lp), slot), raw)) in self
             .envelopes()
             .iter()
             .zip(self.ln_priors())
             .zip(lls.iter_mut())
+            .zip(class_lls.iter_mut())
             .enumerate()
         {
             let d = env.outside_sigmas_squared(lf, lt, noise);
@@ -176,7 +198,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
                 nearest_d = d;
                 nearest = i as u8;
             }
-            let ll = env.ln_likelihood::<M>(lf, lt, noise) + lp;
+            *raw = env.ln_likelihood::<M>(lf, lt, noise);
+            let ll = *raw + lp;
             *slot = ll;
             if ll > best_ll {
                 best_ll = ll;
@@ -188,24 +211,26 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             || !best_ll.is_finite()
         {
             let inv = self.invert(nearest, m);
-            return Verdict::OutOfEnvelope {
+            let verdict = Verdict::OutOfEnvelope {
                 nearest,
                 radius: inv.map_or(Side::Inside, |v| v.radius_side),
                 speed: inv.map_or(Side::Inside, |v| v.speed_side),
             };
+            return (verdict, Some(class_lls));
         }
         // Posterior of the best class by log-sum-exp.
         let n = self.envelopes().len();
         let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - best_ll)).sum();
         let posterior = 1.0 / sum;
-        if posterior >= s.confidence {
+        let verdict = if posterior >= s.confidence {
             Verdict::Class {
                 class: best,
                 posterior,
             }
         } else {
             Verdict::Ambiguous { best, posterior }
-        }
+        };
+        (verdict, Some(class_lls))
     }
 
     /// The radius and speed class `class` would need for the measured pulse (after

@@ -1,9 +1,12 @@
-//! The whole node pipeline: scene + detector + classifier + counters, fed one sample at a time.
+//! The whole node pipeline: scene + detector + classifier + counters (+ an optional flow
+//! monitor), fed one sample at a time.
 
 use crate::classifier::{Measurement, Verdict};
 use crate::counters::Counters;
 use crate::detector::{Detection, Detector};
 use crate::equaliser::Equaliser;
+use crate::error::Error;
+use crate::flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 use crate::math::{Backend, DefaultBackend};
 use crate::scene::{DEFAULT_CLASSES, Scene};
 
@@ -30,21 +33,32 @@ pub enum Event {
         /// Index of the sample that completed the stuck run.
         at_sample: u64,
     },
+    /// The flow after a pulse (only from a monitor built with [`Monitor::with_flow`]): the
+    /// gangue share estimate, its standard error and the close-window alarm. It follows the
+    /// pulse's own `Pulse` event.
+    Flow(FlowStatus),
 }
 
-/// Scene, detector and counters in one value of fixed size: the kernel as a node runs it.
+/// Scene, detector and counters in one value of fixed size: the kernel as a node runs it;
+/// `F` is what else each pulse feeds: nothing ([`NoFlow`], the default: no flow code at all)
+/// or a [`FlowMonitor`] ([`Monitor::with_flow`]).
 #[derive(Debug, Clone)]
-pub struct Monitor<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> {
+pub struct Monitor<
+    const N: usize = DEFAULT_CLASSES,
+    M: Backend = DefaultBackend,
+    F: FlowSlot<M> = NoFlow,
+> {
     scene: Scene<N, M>,
     equaliser: Equaliser,
     detector: Detector<M>,
     counters: Counters<N>,
+    flow: F,
 }
 
 /// Samples equalised at a time by [`Monitor::feed_slice`] (its stack buffer, 4 bytes each).
 pub const EQUALISE_BLOCK: usize = 32;
 
-impl<const N: usize, M: Backend> Monitor<N, M> {
+impl<const N: usize, M: Backend> Monitor<N, M, NoFlow> {
     /// A monitor for a built scene.
     pub fn new(scene: Scene<N, M>) -> Self {
         let detector = Detector::new(&scene);
@@ -53,7 +67,48 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
             scene,
             detector,
             counters: Counters::default(),
+            flow: NoFlow,
         }
+    }
+
+    /// The monitor with a flow monitor ([`crate::flow`]) fed by every pulse: after each
+    /// `Pulse` event comes an [`Event::Flow`] (from [`Monitor::feed_slice`] directly; after
+    /// [`Monitor::feed`], [`Monitor::gap`] or [`Monitor::finish`] from
+    /// [`Monitor::take_flow_event`]). A monitor without it does no flow work at all.
+    ///
+    /// ```
+    /// use coalshock::{Monitor, Scene, flow::FlowConfig};
+    /// let scene: Scene = Scene::paper().unwrap();
+    /// let m = Monitor::new(scene).with_flow(FlowConfig::new(0.05, 0.5, 1e-5)).unwrap();
+    /// assert!(m.flow().threshold() > 11.5);
+    /// ```
+    pub fn with_flow(self, config: FlowConfig) -> Result<Monitor<N, M, FlowMonitor<M>>, Error> {
+        let flow = FlowMonitor::new(config, &self.scene)?;
+        Ok(Monitor {
+            scene: self.scene,
+            equaliser: self.equaliser,
+            detector: self.detector,
+            counters: self.counters,
+            flow,
+        })
+    }
+}
+
+impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
+    /// The flow monitor ([`NoFlow`] for a monitor without one).
+    pub fn flow(&self) -> &F {
+        &self.flow
+    }
+
+    /// Starts a new round of the flow monitor (share to the background, alarm off).
+    pub fn reset_flow(&mut self) {
+        self.flow.reset();
+    }
+
+    /// The `Flow` event of the last pulse, once (`None` without a flow monitor or when it was
+    /// taken already).
+    pub fn take_flow_event(&mut self) -> Option<Event> {
+        self.flow.take().map(Event::Flow)
     }
 
     /// Feeds one ADC sample; returns an event when a pulse ends or the sensor is stuck.
@@ -93,6 +148,9 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
             };
             if let Some(d) = self.detector.feed(s.into()) {
                 on_event(self.handle(d));
+                if let Some(e) = self.take_flow_event() {
+                    on_event(e);
+                }
             }
             rest = tail;
         }
@@ -119,6 +177,9 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
             };
             if let Some(d) = self.detector.feed_value(s.into(), v) {
                 on_event(self.handle(d));
+                if let Some(e) = self.take_flow_event() {
+                    on_event(e);
+                }
             }
             at += 1;
         }
@@ -165,9 +226,19 @@ impl<const N: usize, M: Backend> Monitor<N, M> {
                 // The equaliser's output lags the ADC by its delay.
                 let at_sample =
                     at_sample.saturating_sub(self.equaliser.design().delay_samples() as u64);
-                let (verdict, measurement) = match outcome {
-                    Ok(m) => (self.scene.classify(&m), Some(m)),
-                    Err(r) => (Verdict::Rejected(r), None),
+                let (verdict, measurement) = if F::ON {
+                    let (verdict, lls) = match outcome {
+                        Ok(m) => self.scene.classify_with_likelihoods(&m),
+                        Err(r) => (Verdict::Rejected(r), None),
+                    };
+                    self.flow
+                        .record(&verdict, lls.as_ref().map(|l| l.as_slice()));
+                    (verdict, outcome.ok())
+                } else {
+                    match outcome {
+                        Ok(m) => (self.scene.classify(&m), Some(m)),
+                        Err(r) => (Verdict::Rejected(r), None),
+                    }
                 };
                 self.counters.record(&verdict);
                 Event::Pulse(Report {

@@ -127,7 +127,7 @@ fn run(scene: Scene, samples: &[i32], gaps: &[(usize, u32)], finish: bool) -> Ru
     let take = |e: Option<Event>, out: &mut Run| match e {
         Some(Event::Pulse(r)) => out.reports.push(r),
         Some(Event::Stuck { at_sample }) => out.stuck.push(at_sample),
-        None => {}
+        Some(Event::Flow(_)) | None => {}
     };
     let mut lost = 0u64;
     for (i, &s) in samples.iter().enumerate() {

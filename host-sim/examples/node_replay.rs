@@ -139,6 +139,12 @@ fn replay(
                 );
             }
             Event::Stuck { at_sample } => println!("{prefix}stuck at={at_sample}"),
+            Event::Flow(f) => println!(
+                "{prefix}flow pulses={} share_ppm={} alarm={}",
+                f.pulses,
+                (f.share * 1e6) as u32,
+                f.alarm
+            ),
         }
     }
     let c = monitor.counters();
@@ -163,7 +169,7 @@ fn replay(
         .iter()
         .filter_map(|e| match e {
             Event::Pulse(r) => Some(*r),
-            Event::Stuck { .. } => None,
+            Event::Stuck { .. } | Event::Flow(_) => None,
         })
         .collect();
     let m = match_truth(&reports, &stream.truth, 3);

@@ -635,7 +635,7 @@ fn run<const N: usize, M: Backend>(
                 .into_iter()
                 .filter_map(|e| match e {
                     Event::Pulse(r) => Some(r),
-                    Event::Stuck { .. } => None,
+                    Event::Stuck { .. } | Event::Flow(_) => None,
                 })
                 .collect();
             pulses_detected += reports.len() as u64;

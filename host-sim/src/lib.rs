@@ -3,7 +3,10 @@
 
 pub mod bayes;
 pub mod calibrate;
+pub mod caving;
+pub mod caving_cli;
 pub mod convert;
+pub mod cusum;
 pub mod evaluate;
 mod events;
 pub mod export;

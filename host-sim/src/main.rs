@@ -5,6 +5,9 @@
 //! - `host-sim stream`: a labelled sample stream (`.bin` + `.truth.csv`, see `FORMATS.md`);
 //! - `host-sim evaluate`: the kernel scored on a scene against the Bayes limit (see
 //!   `host_sim::evaluate`, JSON fields in `FORMATS.md`);
+//! - `host-sim caving`: caving rounds, the window closed at the kernel's flow alarm, against
+//!   the same detector on exact features, the true labels, a clairvoyant and the naive rule
+//!   (see `host_sim::caving`, `docs/caving.md`);
 //! - `host-sim identify`: the beam's modes and the accelerometer's resonance estimated from a
 //!   recorded stream (see `host_sim::identify`), printed as a `[sensor]` table;
 //! - `host-sim export`: a scene file as Rust source for a firmware (see `host_sim::export`).
@@ -49,6 +52,9 @@ enum Command {
     /// Measure what each knob buys and costs (math backend, separability grid, integrator,
     /// sample rate): a markdown table, CSV files and SVG Pareto plots.
     Tradeoff(host_sim::tradeoff::TradeoffArgs),
+    /// Simulate caving rounds: the gangue share steps or ramps up, the kernel's flow monitor
+    /// closes the window; delays, false alarms, recovery and gangue content.
+    Caving(host_sim::caving_cli::CavingArgs),
     /// Estimate the tail beam's modes (and the accelerometer's resonance) from a recorded
     /// stream of impacts; prints the scene's [sensor] table.
     Identify(IdentifyArgs),
@@ -270,6 +276,7 @@ fn main() -> Result<()> {
         Command::Tradeoff(args) => host_sim::tradeoff::run(args),
         Command::Identify(args) => run_identify(args),
         Command::Export(args) => host_sim::export::run(args),
+        Command::Caving(args) => host_sim::caving_cli::run_cli(args),
     }
 }
 

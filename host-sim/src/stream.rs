@@ -17,7 +17,7 @@ use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use coalshock::math::Backend;
-use coalshock::{Event, Monitor, Report};
+use coalshock::{Event, FlowSlot, Monitor, Report};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -457,7 +457,14 @@ pub fn generate_with_progress(
     options: &StreamOptions,
     progress: &mut dyn FnMut(usize),
 ) -> Result<Stream, StreamError> {
-    generate_inner(scene, None, n_impacts, seed, options, progress)
+    generate_inner(
+        scene,
+        Source::Drawn(None),
+        n_impacts,
+        seed,
+        options,
+        progress,
+    )
 }
 
 /// [`generate`] with every impact of class `class` (index in the scene's order) instead of a
@@ -479,17 +486,85 @@ pub fn generate_class(
             ),
         ));
     }
-    generate_inner(scene, Some(class), n_impacts, seed, options, &mut |_| {})
+    generate_inner(
+        scene,
+        Source::Drawn(Some(class)),
+        n_impacts,
+        seed,
+        options,
+        &mut |_| {},
+    )
+}
+
+/// One impact of a given class, size, speed and time (see [`generate_planned`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlannedImpact {
+    /// Index of the class in the scene.
+    pub class: usize,
+    /// Sphere radius in m.
+    pub radius_m: f64,
+    /// Impact speed in m/s.
+    pub speed_m_s: f64,
+    /// First contact in s after the lead-in (`options.lead_in_s`); impacts that start while
+    /// the previous one is on are marked as pile-ups.
+    pub start_s: f64,
+}
+
+/// A stream of the impacts of `plan` (class, radius, speed and start time given), through the
+/// scene's contact law and sensor chain, with `seed` for the sample phase, the noise and the
+/// faults; `options.gap_s` and `pileup_share` are not used.
+pub fn generate_planned(
+    scene: &SceneFile,
+    plan: &[PlannedImpact],
+    seed: u64,
+    options: &StreamOptions,
+) -> Result<Stream, StreamError> {
+    for (i, p) in plan.iter().enumerate() {
+        if p.class >= scene.classes.len() {
+            return Err(opt_err(
+                "plan.class",
+                format!("impact {i}: no class {}", p.class),
+            ));
+        }
+        let ok = |v: f64| v.is_finite() && v > 0.0;
+        if !(ok(p.radius_m) && ok(p.speed_m_s) && p.start_s.is_finite() && p.start_s >= 0.0) {
+            return Err(opt_err(
+                "plan",
+                format!("impact {i}: radius and speed must be > 0, start >= 0"),
+            ));
+        }
+    }
+    generate_inner(
+        scene,
+        Source::Plan(plan),
+        plan.len(),
+        seed,
+        options,
+        &mut |_| {},
+    )
+}
+
+/// Where a stream's impacts come from.
+#[derive(Clone, Copy)]
+enum Source<'a> {
+    /// Drawn from the scene's priors, of one class when given.
+    Drawn(Option<usize>),
+    /// Given impact by impact.
+    Plan(&'a [PlannedImpact]),
 }
 
 fn generate_inner(
     scene: &SceneFile,
-    fixed_class: Option<usize>,
+    source: Source<'_>,
     n_impacts: usize,
     seed: u64,
     options: &StreamOptions,
     progress: &mut dyn FnMut(usize),
 ) -> Result<Stream, StreamError> {
+    let fixed_class = match source {
+        Source::Drawn(c) => c,
+        Source::Plan(_) => None,
+    };
     scene.validate()?;
     options.validate()?;
     let faults = &options.faults;
@@ -519,6 +594,11 @@ fn generate_inner(
                 })
                 .unwrap_or(probs.len() - 1)
         });
+        let planned = match source {
+            Source::Plan(plan) => plan.get(i),
+            Source::Drawn(_) => None,
+        };
+        let class = planned.map_or(class, |p| p.class);
         let c = &scene.classes[class];
         let (r0, r1) = (c.radius_m.min.ln(), c.radius_m.max.ln());
         let radius_m = (r0 + r_radius * (r1 - r0)).exp();
@@ -528,6 +608,8 @@ fn generate_inner(
                 crate::scene::drop_speed_m_s(h.min + r_speed * (h.max - h.min))
             }
         };
+        let (radius_m, speed_m_s) =
+            planned.map_or((radius_m, speed_m_s), |p| (p.radius_m, p.speed_m_s));
         let hertz = HertzImpact64::new(&c.material.material(), &plate, radius_m, speed_m_s)
             .map_err(|error| StreamError::Simulation {
                 impact: i,
@@ -535,6 +617,23 @@ fn generate_inner(
                 speed_m_s,
                 error,
             })?;
+        if let Some(p) = planned {
+            let start_s = phase_s + options.lead_in_s + p.start_s;
+            let pileup = start_s < busy_until && i > 0;
+            if let (true, Some(prev)) = (pileup, draws.last_mut()) {
+                prev.pileup = true;
+            }
+            busy_until = busy_until.max(start_s + hertz.duration_s);
+            draws.push(Draw {
+                class,
+                radius_m,
+                speed_m_s,
+                start_s,
+                hertz,
+                pileup,
+            });
+            continue;
+        }
         let pileup = i > 0 && r_pile < options.pileup_share;
         let start_s = match draws.last_mut() {
             Some(prev) if pileup => {
@@ -827,9 +926,9 @@ fn simulate_pulse(
 
 /// Feeds a stream to a monitor: the stored samples in blocks (`Monitor::feed_slice`),
 /// `Monitor::gap` at every recorded gap, `Monitor::finish` at the end. Returns every event.
-pub fn replay_events<const N: usize, M: Backend>(
+pub fn replay_events<const N: usize, M: Backend, F: FlowSlot<M>>(
     stream: &Stream,
-    monitor: &mut Monitor<N, M>,
+    monitor: &mut Monitor<N, M, F>,
 ) -> Vec<Event> {
     let mut out = Vec::new();
     let mut pos = 0usize;
@@ -853,7 +952,7 @@ pub fn replay<const N: usize, M: Backend>(
         .into_iter()
         .filter_map(|e| match e {
             Event::Pulse(r) => Some(r),
-            Event::Stuck { .. } => None,
+            Event::Stuck { .. } | Event::Flow(_) => None,
         })
         .collect()
 }

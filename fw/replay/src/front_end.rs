@@ -305,6 +305,7 @@ impl Checker<'_> {
             Event::Stuck { at_sample } => Event::Stuck {
                 at_sample: at_sample + self.shift,
             },
+            Event::Flow(f) => Event::Flow(f),
         };
         if self.expected.get(self.seen) == Some(&shifted) {
             self.same += 1;

@@ -42,6 +42,7 @@
 #![no_main]
 
 use coalshock::RejectReason;
+use coalshock::flow::{FlowConfig, FlowMonitor, FlowStatus};
 use coalshock::math::{Backend, DefaultBackend, Libm, Micromath};
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{Counters, Detector, Event, Monitor, Scene, Verdict};
@@ -221,6 +222,39 @@ fn gap<M: Backend>(m: &mut Monitor<DEFAULT_CLASSES, M>, lost: u32) -> Option<Eve
 #[inline(never)]
 fn finish<M: Backend>(m: &mut Monitor<DEFAULT_CLASSES, M>) -> Option<Event> {
     m.finish()
+}
+
+/// One pulse through the flow monitor, as `Monitor::with_flow` does it after classifying:
+/// `FlowMonitor::record`, then the status its `Flow` event carries (timed alone).
+#[inline(never)]
+fn flow_record<M: Backend>(
+    flow: &mut FlowMonitor<M>,
+    verdict: &Verdict,
+    lls: Option<&[f32]>,
+) -> FlowStatus {
+    flow.record(black_box(verdict), black_box(lls));
+    flow.status()
+}
+
+/// Times the flow monitor's work on one reported pulse: its class log-likelihoods computed
+/// first (untimed), then [`flow_record`].
+fn time_flow<M: Backend>(
+    flow: &mut FlowMonitor<M>,
+    scene: &Scene<DEFAULT_CLASSES, M>,
+    e: &Event,
+) -> Option<u32> {
+    let Event::Pulse(r) = e else { return None };
+    let (verdict, lls) = match r.measurement {
+        Some(m) => scene.classify_with_likelihoods(&m),
+        None => (r.verdict, None),
+    };
+    let t0 = now();
+    black_box(flow_record(
+        flow,
+        &verdict,
+        lls.as_ref().map(|l| l.as_slice()),
+    ));
+    Some(elapsed(t0, now()))
 }
 
 #[inline(never)]
@@ -423,6 +457,13 @@ fn log_event<M: Backend>(prefix: &str, n: u32, e: &Event, scene: &Scene<DEFAULT_
         Event::Stuck { at_sample } => {
             defmt::println!("{=str}stuck at={=u64}", prefix, at_sample)
         }
+        Event::Flow(f) => defmt::println!(
+            "{=str}flow pulses={=u32} share_ppm={=u32} alarm={=bool}",
+            prefix,
+            f.pulses,
+            (f.share * 1e6) as u32,
+            f.alarm
+        ),
     }
 }
 
@@ -478,12 +519,11 @@ fn main() -> ! {
     let default = if default_is_libm { &libm } else { &micro };
 
     // Logging pass with the default backend: one line per event, then the counters.
-    let mut same = true;
-    if default_is_libm {
-        same &= log_pass(Monitor::new(libm_scene), &default.counters);
+    let (same, flow) = if default_is_libm {
+        log_pass(Monitor::new(libm_scene), &default.counters)
     } else {
-        same &= log_pass(Monitor::new(micro_scene), &default.counters);
-    }
+        log_pass(Monitor::new(micro_scene), &default.counters)
+    };
 
     // The chain scene (default backend): its build and quiet blocks timed, then its stream,
     // logged with the prefix `chain `.
@@ -528,6 +568,9 @@ fn main() -> ! {
             .unwrap_or(0),
     );
     measure("quiet_block_chain_events", chain_quiet_events as u64);
+    measure("flow_pulses", flow.n);
+    measure("insns_flow_update_mean", flow.mean(&clock));
+    measure("insns_flow_update_max", flow.max(&clock));
     report("libm_", &libm, &clock);
     report("micromath_", &micro, &clock);
     let lowest = libm.lowest.min(micro.lowest).min(rt::lowest_touched());
@@ -550,19 +593,23 @@ fn main() -> ! {
 fn log_pass<M: Backend>(
     monitor: Monitor<DEFAULT_CLASSES, M>,
     measured: &Counters<DEFAULT_CLASSES>,
-) -> bool {
-    let counters = replay_logged("", monitor, inputs());
-    counters == *measured
+) -> (bool, Stat) {
+    let (counters, flow) = replay_logged("", monitor, inputs());
+    (counters == *measured, flow)
 }
 
 /// Feeds `inputs` (one `feed` per sample, `gap` at each recorded gap, then `finish`) with
-/// logging: every event line and the counters after `prefix`. Returns the counters.
+/// logging: every event line and the counters after `prefix`. Returns the counters and the
+/// flow monitor's cost per pulse, timed on every pulse of this pass (the caving setting:
+/// background 5 %, level 50 %, one false alarm per 10^5 impacts).
 #[inline(never)]
 fn replay_logged<M: Backend>(
     prefix: &str,
     mut monitor: Monitor<DEFAULT_CLASSES, M>,
     inputs: impl Iterator<Item = Input>,
-) -> Counters<DEFAULT_CLASSES> {
+) -> (Counters<DEFAULT_CLASSES>, Stat) {
+    let mut flow_stat = Stat::default();
+    let mut flow = FlowMonitor::new(FlowConfig::new(0.05, 0.5, 1e-5), monitor.scene()).ok();
     let mut n = 0u32;
     for input in inputs {
         let event = match input {
@@ -571,14 +618,26 @@ fn replay_logged<M: Backend>(
         };
         if let Some(e) = event {
             log_event(prefix, n, &e, monitor.scene());
+            if let Some(t) = flow
+                .as_mut()
+                .and_then(|f| time_flow(f, monitor.scene(), &e))
+            {
+                flow_stat.add(t);
+            }
             n += 1;
         }
     }
     if let Some(e) = monitor.finish() {
         log_event(prefix, n, &e, monitor.scene());
+        if let Some(t) = flow
+            .as_mut()
+            .and_then(|f| time_flow(f, monitor.scene(), &e))
+        {
+            flow_stat.add(t);
+        }
     }
     log_counters(prefix, &monitor);
-    *monitor.counters()
+    (*monitor.counters(), flow_stat)
 }
 
 /// Samples per `feed_slice` call of the chain replay (a multiple of the kernel's equaliser
