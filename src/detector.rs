@@ -65,10 +65,7 @@ pub const C_ENERGY: f32 = 0.411_341_7;
 /// `pi` of a sine.
 pub const PEAK_OMEGA: f32 = 3.290_681;
 
-/// Shortest duration, in samples, that is classified: a pulse measured shorter (by more than
-/// three of its sigmas) is rejected as `TooShort`, and a scene whose shortest pulse is shorter
-/// is refused. The fit's duration error is 3.9 % at 3 samples per pulse and grows as `n^-2.5`.
-pub const MIN_DURATION_SAMPLES: f32 = 2.5;
+pub use crate::scene::MIN_DURATION_SAMPLES;
 
 /// Behind a non-rigid chain, the quiet signal's mean square is tracked with this time
 /// constant (s), and a sample starts a pulse only above [`RING_SIGMAS`] times its root as well:

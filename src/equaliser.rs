@@ -49,6 +49,7 @@
 //! A rigid chain (no mode, no accelerometer) runs no filter at all.
 
 use crate::error::Error;
+pub use crate::error::{ChainFault, ChainStage};
 use crate::math::Backend;
 
 /// Most beam modes a chain can carry.
@@ -166,43 +167,6 @@ impl ChainDynamics {
     pub fn is_rigid(&self) -> bool {
         self.mode_count == 0 && self.accelerometer.is_none()
     }
-}
-
-/// Which stage of the chain a [`ChainFault`] is in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ChainStage {
-    /// Beam mode number `i` (from 0).
-    BeamMode(u8),
-    /// The accelerometer resonance.
-    Accelerometer,
-    /// The beam modes together (their zeros).
-    Beam,
-}
-
-/// What is wrong with a chain stage.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ChainFault {
-    /// A parameter is NaN or infinite.
-    NonFinite,
-    /// The frequency is zero or negative.
-    FrequencyNotPositive,
-    /// A beam mode at or above the Nyquist frequency `f_s / 2`: it cannot be sampled.
-    AboveNyquist,
-    /// The damping ratio is not in `(0, 1)`: an undamped stage never stops ringing, an
-    /// overdamped one is no resonance.
-    DampingOutOfRange,
-    /// The gain is `<= -1`, or the modes' gains make the chain non-minimum-phase (a zero in the
-    /// right half-plane): its inverse would be unstable.
-    NonMinimumPhase,
-    /// The chain's zeros could not be found to f32 precision (modes too close together).
-    NotConverged,
-    /// More than [`MAX_MODES`] modes.
-    TooManyModes,
-    /// The chain's equaliser was not designed at the chain's sample rate: give the dynamics
-    /// to `SensorChain::with_dynamics` after setting the rate.
-    NotDesigned,
 }
 
 /// One second-order section `k (w^2 + f1 w + f0) / (w^2 + e1 w + e0)` in `w = z - 1`, run as

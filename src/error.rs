@@ -1,7 +1,5 @@
 //! The one error type of the kernel: what a scene or a model input can be wrong with.
 
-use crate::equaliser::{ChainFault, ChainStage};
-
 /// A parameter the kernel refused, with the name of the parameter.
 ///
 /// Every constructor and closed form returns this instead of panicking or returning a
@@ -76,4 +74,41 @@ pub(crate) fn representable(x: f32, what: &'static str) -> Result<f32, Error> {
     } else {
         Err(Error::Unrepresentable(what))
     }
+}
+
+/// Which stage of the chain a [`ChainFault`] is in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ChainStage {
+    /// Beam mode number `i` (from 0).
+    BeamMode(u8),
+    /// The accelerometer resonance.
+    Accelerometer,
+    /// The beam modes together (their zeros).
+    Beam,
+}
+
+/// What is wrong with a chain stage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ChainFault {
+    /// A parameter is NaN or infinite.
+    NonFinite,
+    /// The frequency is zero or negative.
+    FrequencyNotPositive,
+    /// A beam mode at or above the Nyquist frequency `f_s / 2`: it cannot be sampled.
+    AboveNyquist,
+    /// The damping ratio is not in `(0, 1)`: an undamped stage never stops ringing, an
+    /// overdamped one is no resonance.
+    DampingOutOfRange,
+    /// The gain is `<= -1`, or the modes' gains make the chain non-minimum-phase (a zero in the
+    /// right half-plane): its inverse would be unstable.
+    NonMinimumPhase,
+    /// The chain's zeros could not be found to f32 precision (modes too close together).
+    NotConverged,
+    /// More than [`crate::equaliser::MAX_MODES`] modes.
+    TooManyModes,
+    /// The chain's equaliser was not designed at the chain's sample rate: give the dynamics
+    /// to `SensorChain::with_dynamics` after setting the rate.
+    NotDesigned,
 }

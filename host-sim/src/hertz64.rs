@@ -17,7 +17,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::integrate::SimError;
+use crate::sim_error::SimError;
 
 /// `tau = integral_0^1 (1 - x^(5/2))^(-1/2) dx = (2/5) B(2/5, 1/2)` (dimensionless).
 pub const HERTZ_TAU: f64 = 1.471_637_592_162_352_4;

@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::hertz64::{HertzImpact64, Material64, STANDARD_GRAVITY_M_S2};
 use crate::integrate::{ContactProblem, Limits, Method, SimError, Tolerance, integrate_contact};
-use crate::laws::LawSpec;
+use crate::law_spec::LawSpec;
 
 /// What to simulate (SI units).
 #[derive(Debug, Clone, Serialize, Deserialize)]

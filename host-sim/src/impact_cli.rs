@@ -32,7 +32,7 @@ use clap::ValueEnum;
 use crate::hertz64::{HERTZ_TC_FACTOR, Material64};
 use crate::impact::{ImpactReport, ImpactSpec, simulate};
 use crate::integrate::{Method, Tolerance};
-use crate::laws::LawSpec;
+use crate::law_spec::LawSpec;
 
 /// Input columns of a batch file, in the order they are echoed (see the module docs).
 pub const INPUT_COLUMNS: [&str; 15] = [

@@ -94,7 +94,7 @@ pub struct PaperProblems {
 pub fn paper_problems() -> Result<PaperProblems, SimError> {
     let hertz = ImpactSpec::paper_scene().hertz()?;
     let undamped = undamped_problem(&hertz);
-    let adams_law = ForceLaw::adams_for_restitution(
+    let adams_law = crate::law_spec::adams_for_restitution(
         hertz.stiffness,
         1.5,
         1e-5,

@@ -14,7 +14,7 @@
 //!
 //! The paper does not give its damping. Here `c_max` is chosen per material and radius so that
 //! the impact at the reference speed (1 m/s) rebounds with a stated coefficient of restitution
-//! ([`ForceLaw::adams_for_restitution`]); it is then held fixed while the speed varies, as an
+//! ([`crate::law_spec::adams_for_restitution`]); it is then held fixed while the speed varies, as an
 //! Adams contact with fixed parameters would be. The restitution therefore varies with speed
 //! (it is reported).
 
@@ -388,7 +388,7 @@ fn sweep_point(
 fn calibrate(material: &Material64, radius_m: f64, cfg: &PaperConfig) -> Result<f64, SimError> {
     let k = stiffness_of(material, radius_m);
     let m = sphere_mass_kg(material.density_kg_m3, radius_m);
-    match ForceLaw::adams_for_restitution(
+    match crate::law_spec::adams_for_restitution(
         k,
         1.5,
         cfg.depth_m,

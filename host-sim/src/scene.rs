@@ -44,7 +44,7 @@ use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::hertz64::Material64;
-use crate::laws::LawSpec;
+use crate::law_spec::LawSpec;
 
 /// Longest class name in bytes (the kernel's `coalshock::scene::NAME_LEN`).
 pub const MAX_CLASS_NAME_BYTES: usize = coalshock::scene::NAME_LEN;

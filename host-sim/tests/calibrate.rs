@@ -15,7 +15,7 @@ use host_sim::convert::calibrated_settings;
 use host_sim::evaluate::{EvalOptions, evaluate};
 use host_sim::hertz64::Material64;
 use host_sim::impact::{ImpactSpec, simulate};
-use host_sim::laws::LawSpec;
+use host_sim::law_spec::LawSpec;
 use host_sim::scene::{self, SceneFile};
 
 fn shipped(name: &str) -> SceneFile {

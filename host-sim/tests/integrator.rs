@@ -11,7 +11,8 @@ use host_sim::impact::{ImpactSpec, simulate};
 use host_sim::integrate::{
     ContactProblem, ContactSolution, Limits, Method, SimError, Tolerance, integrate_contact,
 };
-use host_sim::laws::{ForceLaw, LawSpec, RestitutionModel, step_cubic};
+use host_sim::law_spec::{LawSpec, adams_for_restitution};
+use host_sim::laws::{ForceLaw, RestitutionModel, step_cubic};
 
 fn rel(a: f64, b: f64) -> f64 {
     ((a - b) / b).abs()
@@ -179,7 +180,7 @@ fn restitution_of(spec: &ImpactSpec, law: LawSpec) -> f64 {
 /// Each restitution law against its target e in {0.3, 0.5, 0.8, 0.95} on the paper scene.
 ///
 /// Stated tolerances on |e_simulated - e_target| (the force clamped at zero):
-/// * Adams with `c_max` from [`ForceLaw::adams_for_restitution`]: 1e-6 (by construction);
+/// * Adams with `c_max` from [`adams_for_restitution`]: 1e-6 (by construction);
 /// * Flores: 0.05 over the whole range; Gonthier: 0.04 over the whole range;
 /// * Tsuji: 0.01 for e >= 0.8; at e = 0.3 it rebounds markedly faster (> +0.05);
 /// * Hunt-Crossley and Lankarani-Nikravesh: 0.005 at e = 0.95 only; they are derived for e
@@ -304,8 +305,8 @@ fn adams_is_continuous_and_never_pulls() {
 #[test]
 fn damping_lowers_peak_force_more_at_higher_speed() {
     let h1 = paper();
-    let law = ForceLaw::adams_for_restitution(h1.stiffness, 1.5, 1e-5, h1.mass_kg, 1.0, 0.8)
-        .expect("bracketed");
+    let law =
+        adams_for_restitution(h1.stiffness, 1.5, 1e-5, h1.mass_kg, 1.0, 0.8).expect("bracketed");
     let ForceLaw::AdamsImpact { c_max_n_s_m, .. } = law else {
         panic!("not an Adams law");
     };

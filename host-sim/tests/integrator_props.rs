@@ -8,7 +8,8 @@
 
 use host_sim::hertz64::{HertzImpact64, Material64};
 use host_sim::integrate::{ContactProblem, Limits, Method, Tolerance, integrate_contact};
-use host_sim::laws::{ForceLaw, LawSpec};
+use host_sim::law_spec::LawSpec;
+use host_sim::laws::ForceLaw;
 use proptest::prelude::*;
 
 fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
