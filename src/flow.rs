@@ -468,7 +468,7 @@ mod tests {
     use crate::math::Libm;
 
     fn paper() -> Scene<4, Libm> {
-        Scene::paper().unwrap_or_else(|_| unreachable!())
+        Scene::<4, Libm>::paper_for().unwrap_or_else(|_| unreachable!())
     }
 
     fn monitor(config: FlowConfig) -> FlowMonitor<Libm> {
