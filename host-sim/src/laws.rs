@@ -5,9 +5,9 @@
 //! sphere, positive when repulsive; every law returns 0 for `delta <= 0` and, except undamped
 //! Hertz (which cannot pull), is clamped at zero so that it never pulls.
 //!
-//! [`ForceLaw`] is the concrete law with numbers in SI units; [`LawSpec`] is the user's choice
-//! (for example "Flores with e = 0.5") that [`LawSpec::build`] turns into a [`ForceLaw`] for a
-//! given scene.
+//! [`ForceLaw`] is the concrete law with numbers in SI units; the user's choice (for example
+//! "Flores with e = 0.5") is a `LawSpec` of the `law_spec` module above this one, which builds
+//! a [`ForceLaw`] for a given scene.
 
 use serde::{Deserialize, Serialize};
 
