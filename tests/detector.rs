@@ -97,7 +97,13 @@ fn fit_errors(spp: f64) -> (f64, f64) {
 fn shape_fit_errors_by_rate() {
     const ASSUMED: (f64, f64) = (0.1, 0.3);
     const MEASURED: (f64, f64) = (0.15, 0.65);
-    let rounding = 4.0 * f32::EPSILON as f64;
+    // The fit's arithmetic: f32 rounding with libm; with micromath the peak's error floors at
+    // 1.82e-4 from 15 samples per pulse on (its `powf`, behind `F^(2/3)` and `z^(3/2)`).
+    let rounding = if coalshock::math::BACKEND == "micromath" {
+        2.5e-4
+    } else {
+        4.0 * f32::EPSILON as f64
+    };
     let mut worst = (0.0f64, 0.0f64);
     for spp in [3.0, 4.0, 5.0, 7.0, 10.0, 15.0, 30.0, 100.0, 400.0] {
         let (ep, ed) = fit_errors(spp);
