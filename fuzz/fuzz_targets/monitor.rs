@@ -11,8 +11,8 @@
 #![no_main]
 
 use coalshock::{
-    Counters, Event, Material, Monitor, ParticleClass, Range, Scene, SensorChain, Settings, Speed,
-    Verdict,
+    Accelerometer, BeamMode, ChainDynamics, Counters, Event, Material, Monitor, ParticleClass,
+    Range, Scene, SensorChain, Settings, Speed, Verdict,
 };
 use libfuzzer_sys::fuzz_target;
 
@@ -126,13 +126,35 @@ impl Bytes<'_> {
             3 => (0, 65535),
             _ => (-32768, 32767),
         };
-        SensorChain {
+        let rigid = SensorChain {
             sample_rate_hz,
             force_per_count_n,
             noise_rms_counts,
             adc_min,
             adc_max,
+            dynamics: ChainDynamics::RIGID,
+        };
+        // Half the inputs put a tail beam (0-4 modes, any parameters) and an accelerometer
+        // stage behind the plate; a chain the kernel refuses leaves the plate rigid.
+        if self.u8() < 128 {
+            return rigid;
         }
+        let mut d = ChainDynamics::RIGID;
+        for _ in 0..self.u8() % 5 {
+            let mode = BeamMode {
+                frequency_hz: self.f32_in(10.0, 1e5),
+                damping_ratio: self.f32_in(1e-3, 1.5),
+                gain: self.f32_in(1e-3, 2.0),
+            };
+            d = d.with_mode(mode).unwrap_or(d);
+        }
+        if self.u8() < 128 {
+            d = d.with_accelerometer(Accelerometer {
+                frequency_hz: self.f32_in(1e2, 1e6),
+                damping_ratio: self.f32_in(1e-3, 1.5),
+            });
+        }
+        rigid.with_dynamics(d).unwrap_or(rigid)
     }
     fn settings(&mut self) -> Settings {
         let d = Settings::default();
@@ -205,6 +227,8 @@ impl Fed {
                 }
             }
             Some(Event::Stuck { .. }) => self.stuck += 1,
+            // A monitor without a flow monitor never reports the flow.
+            Some(Event::Flow(_)) => unreachable!("flow event without a flow monitor"),
             None => {}
         }
         self.check(synced || e.is_some());
