@@ -177,6 +177,8 @@ pub struct WorkStats {
     /// Stops and restarts where a damped law's clamp at zero engages or releases (the
     /// unclamped force changes sign); at most [`MAX_CLAMP_RESTARTS`] per contact.
     pub clamp_restarts: usize,
+    /// Stops and restarts where a history-dependent law's penetration turned (0 or 1).
+    pub turns: usize,
 }
 
 /// A step's continuous output `y(theta) = r0 + theta (r1 + (1 - theta) (r2 + theta (r3 +
@@ -242,6 +244,8 @@ pub struct ContactSolution {
     /// The scales used.
     pub scales: Scales,
     law: ForceLaw,
+    /// For a history-dependent law: the scaled time of the turn and the law after it.
+    turned: Option<(f64, ForceLaw)>,
     segments: Vec<Segment>,
 }
 
@@ -261,7 +265,8 @@ impl ContactSolution {
 
     /// Contact force in N at `t_s` from the continuous output, or `None` outside the contact.
     pub fn force_at(&self, t_s: f64) -> Option<f64> {
-        self.state_at(t_s).map(|(d, dd)| self.law.force(d, dd))
+        let law = law_at(&self.law, self.turned.as_ref(), t_s / self.scales.time_s);
+        self.state_at(t_s).map(|(d, dd)| law.force(d, dd))
     }
 
     /// Times (s) of the accepted step boundaries, from 0 to the contact end.
@@ -298,9 +303,25 @@ impl ContactSolution {
         Ok(out)
     }
 
-    /// The law that was integrated.
+    /// The law that was integrated (for a history-dependent law, as it was at first contact).
     pub fn law(&self) -> &ForceLaw {
         &self.law
+    }
+
+    /// For a history-dependent law ([`ForceLaw::awaits_turn`]): the time in s at which the
+    /// penetration turned and the law from then on ([`ForceLaw::turned_at`]).
+    pub fn turned(&self) -> Option<(f64, &ForceLaw)> {
+        self.turned
+            .as_ref()
+            .map(|(tau, law)| (tau * self.scales.time_s, law))
+    }
+}
+
+/// The law in force at scaled time `tau`: `first` before the turn, the turned law from it on.
+fn law_at<'a>(first: &'a ForceLaw, turned: Option<&'a (f64, ForceLaw)>, tau: f64) -> &'a ForceLaw {
+    match turned {
+        Some((t_turn, law)) if tau >= *t_turn => law,
+        _ => first,
     }
 }
 
@@ -325,8 +346,8 @@ fn eval_segments(segments: &[Segment], tau: f64) -> Option<[f64; 2]> {
 }
 
 /// Right-hand side in scaled units, counting evaluations.
-struct Rhs<'a> {
-    law: &'a ForceLaw,
+struct Rhs {
+    law: ForceLaw,
     d_m: f64,
     u_m_s: f64,
     /// dx/dtau = cx v
@@ -338,7 +359,7 @@ struct Rhs<'a> {
     evals: usize,
 }
 
-impl Rhs<'_> {
+impl Rhs {
     fn f(&mut self, y: [f64; 2]) -> [f64; 2] {
         self.evals += 1;
         let force = self.law.force(y[0] * self.d_m, y[1] * self.u_m_s);
@@ -477,6 +498,9 @@ enum Event {
     End(f64),
     /// Kink crossing at this theta.
     Kink(f64),
+    /// The penetration turns (`delta' = 0`) at this theta; only for a law that
+    /// [`ForceLaw::awaits_turn`].
+    Turn(f64),
     /// The unclamped force changes sign (the clamp at zero engages or releases) at this theta.
     Clamp(f64),
     /// The step left the kink and returned across it: retry with a smaller step.
@@ -485,13 +509,13 @@ enum Event {
 
 /// The clamp's switching function on the scaled state: [`ForceLaw::clamp_switch`] at
 /// `delta = x delta_max`, `delta' = v u`.
-struct ClampSwitch<'a> {
-    law: &'a ForceLaw,
+struct ClampSwitch {
+    law: ForceLaw,
     d_m: f64,
     u_m_s: f64,
 }
 
-impl ClampSwitch<'_> {
+impl ClampSwitch {
     fn value(&self, y: [f64; 2]) -> f64 {
         self.law.clamp_switch(y[0] * self.d_m, y[1] * self.u_m_s)
     }
@@ -520,14 +544,23 @@ const RESTART_THETA: f64 = 1e-9;
 fn find_event(
     seg: &Segment,
     x_kink: Option<f64>,
+    ends: (f64, bool),
     clamp: Option<&ClampSwitch>,
     clamp_budget: usize,
 ) -> Option<Event> {
+    let (x_end, await_turn) = ends;
     let x = seg.quartic(0);
     let poly_root =
         |p: Quartic, a: f64| earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0);
     // At first contact x(0) = 0: that root is the start, not an end.
-    let end = poly_root(x, if x.0[0] == 0.0 { RESTART_THETA } else { 0.0 });
+    let x_rel = x.minus(x_end);
+    let end = poly_root(x_rel, if x_rel.0[0] == 0.0 { RESTART_THETA } else { 0.0 });
+    let turn = if await_turn {
+        let v = seg.quartic(1);
+        poly_root(v, if v.0[0] == 0.0 { RESTART_THETA } else { 0.0 })
+    } else {
+        None
+    };
     let mut kink = None;
     if let Some(xk) = x_kink {
         let g = x.minus(xk);
@@ -540,10 +573,10 @@ fn find_event(
             kink = poly_root(g, 0.0);
         }
     }
-    let first = match (end, kink) {
-        (Some(e), Some(k)) => Some(e.min(k)),
-        (e, k) => e.or(k),
-    };
+    let first = [end, kink, turn]
+        .into_iter()
+        .flatten()
+        .fold(None, |acc: Option<f64>, th| Some(acc.map_or(th, |a| a.min(th))));
     let hi = first.unwrap_or(1.0);
     let switch = clamp.filter(|_| clamp_budget > 0).and_then(|sw| {
         let v = seg.quartic(1);
@@ -557,6 +590,7 @@ fn find_event(
     match (switch, first) {
         (Some(th), _) => Some(Event::Clamp(th)),
         (None, Some(th)) if end == Some(th) => Some(Event::End(th)),
+        (None, Some(th)) if turn == Some(th) => Some(Event::Turn(th)),
         (None, Some(th)) => Some(Event::Kink(th)),
         (None, None) => None,
     }
@@ -621,7 +655,7 @@ pub fn integrate_contact(
         speed_m_s: u,
     };
     let mut rhs = Rhs {
-        law: &law,
+        law,
         d_m,
         u_m_s: u,
         cx: HERTZ_TC_FACTOR,
@@ -629,13 +663,10 @@ pub fn integrate_contact(
         p: time_s / (u * m),
         evals: 0,
     };
-    let x_kink = law.kink_m().map(|d| d / d_m);
-    let clamp_switch = ClampSwitch {
-        law: &law,
-        d_m,
-        u_m_s: u,
-    };
-    let clamp = law.is_clamped().then_some(&clamp_switch);
+    let mut x_kink = law.kink_m().map(|d| d / d_m);
+    let mut clamp_switch = ClampSwitch { law, d_m, u_m_s: u };
+    // A history-dependent law: the law after the turn, from scaled time turned.0 on.
+    let mut turned: Option<(f64, ForceLaw)> = None;
 
     let mut work = WorkStats::default();
     let mut segments: Vec<Segment> = Vec::new();
@@ -723,10 +754,12 @@ pub fn integrate_contact(
             }
             last_rejected = false;
         }
+        let ends = (rhs.law.contact_end_m() / d_m, rhs.law.awaits_turn());
         let event = match find_event(
             &trial.seg,
             x_kink,
-            clamp,
+            ends,
+            law.is_clamped().then_some(&clamp_switch),
             MAX_CLAMP_RESTARTS.saturating_sub(work.clamp_restarts),
         ) {
             Some(Event::Retry) => {
@@ -737,9 +770,10 @@ pub fn integrate_contact(
                 }
                 continue;
             }
-            Some(Event::End(th)) => Some((th, Some(0.0), true)),
-            Some(Event::Kink(th)) => Some((th, x_kink, false)),
-            Some(Event::Clamp(th)) => Some((th, None, false)),
+            Some(Event::End(th)) => Some((th, Landing::X(ends.0), true)),
+            Some(Event::Kink(th)) => Some((th, x_kink.map_or(Landing::Free, Landing::X), false)),
+            Some(Event::Turn(th)) => Some((th, Landing::V, false)),
+            Some(Event::Clamp(th)) => Some((th, Landing::Free, false)),
             None => None,
         };
         match event {
@@ -769,18 +803,9 @@ pub fn integrate_contact(
                     (y, f, Segment::hermite(t, 0.0, y, f, y, f))
                 };
                 work.steps += 1;
-                // Newton correction onto x = target (end and kink; none for a clamp switch).
-                let (dt, y_e) = match target {
-                    Some(xt) => {
-                        let dt = if fe[0] != 0.0 {
-                            -(ye[0] - xt) / fe[0]
-                        } else {
-                            0.0
-                        };
-                        (dt, [xt, ye[1] + fe[1] * dt])
-                    }
-                    None => (0.0, ye),
-                };
+                // Newton correction onto x = target (end and kink), onto v = 0 (turn); none for
+                // a clamp switch.
+                let (dt, y_e) = target.land(ye, fe);
                 let t_e = t + he + dt;
                 let mut seg = seg;
                 seg.h = t_e - t;
@@ -790,7 +815,7 @@ pub fn integrate_contact(
                     let duration_s = t_e * time_s;
                     work.force_evals = rhs.evals;
                     return Ok(finish(
-                        law,
+                        (law, turned),
                         scales,
                         segments,
                         work,
@@ -800,10 +825,16 @@ pub fn integrate_contact(
                         problem.gravity_m_s2,
                     ));
                 }
-                if target.is_some() {
-                    work.kink_restarts += 1;
-                } else {
-                    work.clamp_restarts += 1;
+                match target {
+                    Landing::X(_) => work.kink_restarts += 1,
+                    Landing::Free => work.clamp_restarts += 1,
+                    Landing::V => {
+                        work.turns += 1;
+                        rhs.law = rhs.law.turned_at(y_e[0] * d_m);
+                        clamp_switch.law = rhs.law;
+                        x_kink = rhs.law.kink_m().map(|d| d / d_m);
+                        turned = Some((t_e, rhs.law));
+                    }
                 }
                 t = t_e;
                 y = y_e;
@@ -820,6 +851,36 @@ pub fn integrate_contact(
                 h = h_next;
                 retry_scale = 1.0;
             }
+        }
+    }
+}
+
+/// Where a step to an event lands.
+#[derive(Debug, Clone, Copy)]
+enum Landing {
+    /// On `x = target` (contact end, kink).
+    X(f64),
+    /// On `v = 0` (the penetration's turn).
+    V,
+    /// Where the step ends (a clamp switch).
+    Free,
+}
+
+impl Landing {
+    /// One Newton correction `(dt, y)` from the step's end `ye` with slope `fe` onto the
+    /// landing's line.
+    fn land(self, ye: [f64; 2], fe: [f64; 2]) -> (f64, [f64; 2]) {
+        let newton = |g: f64, dg: f64| if dg != 0.0 { -g / dg } else { 0.0 };
+        match self {
+            Landing::X(xt) => {
+                let dt = newton(ye[0] - xt, fe[0]);
+                (dt, [xt, ye[1] + fe[1] * dt])
+            }
+            Landing::V => {
+                let dt = newton(ye[1], fe[1]);
+                (dt, [ye[0] + fe[0] * dt, 0.0])
+            }
+            Landing::Free => (0.0, ye),
         }
     }
 }
@@ -851,7 +912,7 @@ fn golden_max(g: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> (f64,
 
 #[allow(clippy::too_many_arguments)]
 fn finish(
-    law: ForceLaw,
+    (law, turned): (ForceLaw, Option<(f64, ForceLaw)>),
     scales: Scales,
     segments: Vec<Segment>,
     work: WorkStats,
@@ -861,6 +922,7 @@ fn finish(
     gravity_m_s2: f64,
 ) -> ContactSolution {
     let force_tau = |tau: f64| -> f64 {
+        let law = law_at(&law, turned.as_ref(), tau);
         eval_segments(&segments, tau)
             .map(|y| law.force(y[0] * scales.delta_m, y[1] * scales.speed_m_s))
             .unwrap_or(0.0)
@@ -890,15 +952,17 @@ fn finish(
     }
     // Peak force: sample each step at its start and middle, then golden section around the
     // best sample.
-    let force_y = |y: [f64; 2]| law.force(y[0] * scales.delta_m, y[1] * scales.speed_m_s);
+    let force_y = |tau: f64, y: [f64; 2]| {
+        law_at(&law, turned.as_ref(), tau).force(y[0] * scales.delta_m, y[1] * scales.speed_m_s)
+    };
     let t_end = duration_s / scales.time_s;
     let mut samples: Vec<f64> = Vec::with_capacity(2 * segments.len() + 1);
     let mut sample_f: Vec<f64> = Vec::with_capacity(2 * segments.len() + 1);
     for s in &segments {
         samples.push(s.t0);
-        sample_f.push(force_y(s.eval(0.0)));
+        sample_f.push(force_y(s.t0, s.eval(0.0)));
         samples.push(s.t0 + 0.5 * s.h);
-        sample_f.push(force_y(s.eval(0.5)));
+        sample_f.push(force_y(s.t0 + 0.5 * s.h, s.eval(0.5)));
     }
     samples.push(t_end);
     sample_f.push(force_tau(t_end));
@@ -960,6 +1024,7 @@ fn finish(
         work,
         scales,
         law,
+        turned,
         segments,
     }
 }

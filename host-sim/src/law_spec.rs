@@ -8,6 +8,7 @@ use crate::hertz64::{HERTZ_TC_FACTOR, HertzImpact64, positive};
 use crate::integrate::{ContactProblem, Limits, Method, Tolerance, integrate_contact};
 use crate::laws::{ForceLaw, RestitutionModel};
 use crate::sim_error::SimError;
+use crate::thornton::ThorntonContact;
 
 /// An Adams IMPACT law whose `c_max` (N s/m) makes a gravity-free impact of a sphere of mass
 /// `mass_kg` (kg) at `speed_m_s` (m/s) rebound with coefficient of restitution
@@ -177,6 +178,16 @@ pub enum LawSpec {
         /// Target coefficient of restitution `e`.
         restitution: f64,
     },
+    /// Thornton's elastic-perfectly-plastic contact with limiting contact pressure
+    /// `yield_pressure_pa` (Pa), optionally times the hysteresis damping
+    /// `(1 + chi delta_dot / u)` of a restitution model (see [`crate::thornton`]). Needs the
+    /// scene's `E*` and `R` (a [`HertzImpact64::new`]).
+    Thornton {
+        /// Limiting contact pressure `p_y` in Pa.
+        yield_pressure_pa: f64,
+        /// The viscous part: `chi = model.chi(restitution)`, or none.
+        damping: Option<(RestitutionModel, f64)>,
+    },
 }
 
 impl LawSpec {
@@ -209,6 +220,27 @@ impl LawSpec {
             Self::Flores { restitution: e } => restitution(RestitutionModel::Flores, e)?,
             Self::Gonthier { restitution: e } => restitution(RestitutionModel::Gonthier, e)?,
             Self::Tsuji { restitution: e } => ForceLaw::tsuji(k, m, e)?,
+            Self::Thornton {
+                yield_pressure_pa,
+                damping,
+            } => {
+                positive("radius_m", hertz.radius_m)?;
+                let chi = match damping {
+                    Some((model, e)) => {
+                        ForceLaw::restitution_law(model, k, 1.5, e, u)?;
+                        model.chi(e)
+                    }
+                    None => 0.0,
+                };
+                ForceLaw::Thornton(ThorntonContact {
+                    stiffness: k,
+                    radius_m: hertz.radius_m,
+                    yield_pressure_pa,
+                    chi,
+                    impact_speed_m_s: u,
+                    unloading: None,
+                })
+            }
         };
         law.validate()?;
         Ok(law)

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::hertz64::positive;
 use crate::sim_error::SimError;
+use crate::thornton::ThorntonContact;
 
 /// Adams' cubic STEP function (MSC Adams/Solver function reference, `STEP`):
 /// `h0` for `x <= x0`, `h1` for `x >= x1`, else `h0 + (h1 - h0) s^2 (3 - 2 s)` with
@@ -147,6 +148,13 @@ pub enum ForceLaw {
         /// `beta = ln e / sqrt(ln^2 e + pi^2)` (dimensionless).
         beta: f64,
     },
+    /// Thornton's elastic-perfectly-plastic contact (see [`crate::thornton`]): Hertz up to the
+    /// limiting contact pressure, then linear plastic loading, elastic unloading from the
+    /// enlarged radius `R_p`; times `(1 + chi delta_dot / u)` and clamped at zero. History
+    /// dependent: the integrator replaces the law by [`ForceLaw::turned_at`] where the
+    /// penetration turns, and ends the contact at the residual penetration
+    /// ([`ForceLaw::contact_end_m`]).
+    Thornton(ThorntonContact),
 }
 
 impl ForceLaw {
@@ -212,6 +220,7 @@ impl ForceLaw {
                 let c = -2.0 * (5.0_f64 / 6.0).sqrt() * beta * (s_n * mass_kg).sqrt();
                 stiffness * delta_m * sqrt_d + c * delta_dot_m_s
             }
+            Self::Thornton(t) => t.unclamped_force_n(delta_m, delta_dot_m_s),
         }
     }
 
@@ -225,7 +234,9 @@ impl ForceLaw {
     ///   (N/m^e), the STEP term `c_max delta^(2 - e) (3 - 2 delta/d) / d^2` for `delta < d`;
     /// * restitution laws: `S = G / (K delta^n) = 1 + chi delta_dot / u0` (dimensionless);
     /// * Tsuji: `S = G / delta^(1/4) = k delta^1.25 + c0 delta_dot` (N/m^1.25) with
-    ///   `c0 = -2 sqrt(5/6) beta sqrt(1.5 k m)` (N s/m^1.25).
+    ///   `c0 = -2 sqrt(5/6) beta sqrt(1.5 k m)` (N s/m^1.25);
+    /// * Thornton: `S = 1 + chi delta_dot / u` (dimensionless; the elastic-plastic force's own
+    ///   zero, at the residual penetration, is the contact end).
     pub fn clamp_switch(&self, delta_m: f64, delta_dot_m_s: f64) -> f64 {
         self.clamp_switch_bounds((delta_m, delta_m), (delta_dot_m_s, delta_dot_m_s))
             .0
@@ -270,6 +281,10 @@ impl ForceLaw {
                     stiffness * d_hi.powf(1.25) + c0 * delta_dot.1,
                 )
             }
+            Self::Thornton(t) => (
+                t.damping_factor(delta_dot.0),
+                t.damping_factor(delta_dot.1),
+            ),
         }
     }
 
@@ -283,10 +298,38 @@ impl ForceLaw {
     /// restart from: `Some(d)` for [`ForceLaw::AdamsImpact`], `None` otherwise. (Every law is
     /// also non-smooth at `delta = 0`, and the damped ones where the clamp at zero engages,
     /// see [`ForceLaw::unclamped_force`].)
+    /// For [`ForceLaw::Thornton`] while loading: `Some(delta_y)`, where the curvature of the
+    /// loading curve jumps.
     pub fn kink_m(&self) -> Option<f64> {
         match *self {
             Self::AdamsImpact { d_m, .. } if d_m > 0.0 => Some(d_m),
+            Self::Thornton(t) if t.unloading.is_none() => Some(t.yield_penetration_m()),
             _ => None,
+        }
+    }
+
+    /// Whether the force depends on the penetration's history and has not turned yet: the
+    /// integrator then stops where `delta_dot` falls to 0 and continues with
+    /// [`ForceLaw::turned_at`] (only [`ForceLaw::Thornton`] while loading).
+    pub fn awaits_turn(&self) -> bool {
+        matches!(self, Self::Thornton(t) if t.unloading.is_none())
+    }
+
+    /// The law after the penetration turned at `delta_max_m` (m): Thornton's unloading branch;
+    /// every other law is returned unchanged.
+    pub fn turned_at(&self, delta_max_m: f64) -> Self {
+        match *self {
+            Self::Thornton(t) => Self::Thornton(t.unloaded_from(delta_max_m)),
+            other => other,
+        }
+    }
+
+    /// The penetration (m) at which the contact ends: the residual penetration `delta_p` of a
+    /// turned Thornton law (the dent), 0 otherwise.
+    pub fn contact_end_m(&self) -> f64 {
+        match *self {
+            Self::Thornton(t) => t.unloading.map_or(0.0, |u| u.residual_m),
+            _ => 0.0,
         }
     }
 
@@ -297,6 +340,7 @@ impl ForceLaw {
             | Self::AdamsImpact { stiffness, .. }
             | Self::Restitution { stiffness, .. }
             | Self::Tsuji { stiffness, .. } => stiffness,
+            Self::Thornton(t) => t.stiffness,
         }
     }
 
@@ -306,7 +350,7 @@ impl ForceLaw {
             Self::Hertz { exponent, .. }
             | Self::AdamsImpact { exponent, .. }
             | Self::Restitution { exponent, .. } => exponent,
-            Self::Tsuji { .. } => 1.5,
+            Self::Tsuji { .. } | Self::Thornton(_) => 1.5,
         }
     }
 
@@ -316,6 +360,7 @@ impl ForceLaw {
         positive("law.exponent", self.exponent())?;
         match *self {
             Self::Hertz { .. } => Ok(()),
+            Self::Thornton(t) => t.validate(),
             Self::AdamsImpact {
                 c_max_n_s_m, d_m, ..
             } => {

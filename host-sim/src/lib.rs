@@ -24,4 +24,5 @@ pub mod scene;
 pub mod sensor;
 pub mod sim_error;
 pub mod stream;
+pub mod thornton;
 pub mod tradeoff;

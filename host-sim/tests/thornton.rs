@@ -1,0 +1,168 @@
+//! Checks of Thornton's elastic-perfectly-plastic contact: the closed forms against the
+//! formulas as Thornton (1997) prints them, and the integrator against the closed forms.
+//!
+//! Run with `--nocapture` to see the measured figures.
+
+use host_sim::hertz64::{HERTZ_TAU, HertzImpact64, Material64, effective_modulus_pa};
+use host_sim::integrate::{ContactProblem, ContactSolution, Limits, Method, Tolerance};
+use host_sim::integrate::integrate_contact;
+use host_sim::law_spec::LawSpec;
+use host_sim::laws::RestitutionModel;
+use host_sim::thornton::{ThorntonImpact64, incomplete_beta_2_5_1_2};
+
+fn rel(a: f64, b: f64) -> f64 {
+    ((a - b) / b).abs()
+}
+
+/// Coal of the paper (R = 0.03 m) on carbon steel at `speed_m_s`.
+fn coal(speed_m_s: f64) -> HertzImpact64 {
+    HertzImpact64::new(&Material64::COAL, &Material64::CARBON_STEEL, 0.03, speed_m_s)
+        .expect("valid scene")
+}
+
+fn integrate(h: &HertzImpact64, spec: LawSpec) -> ContactSolution {
+    let problem = ContactProblem {
+        law: spec.build(h).expect("law builds"),
+        mass_kg: h.mass_kg,
+        speed_m_s: h.speed_m_s,
+        gravity_m_s2: 0.0,
+    };
+    integrate_contact(
+        &problem,
+        Method::Dopri5,
+        Tolerance::new(1e-12),
+        &Limits::default(),
+    )
+    .expect("integration succeeds")
+}
+
+fn thornton(yield_pressure_pa: f64) -> LawSpec {
+    LawSpec::Thornton {
+        yield_pressure_pa,
+        damping: None,
+    }
+}
+
+/// Thornton's eq. for the restitution as printed (his eq. 29, with `x = V_y / V_i`):
+/// `e = (6 sqrt(3) / 5)^(1/2) (1 - x^2 / 6)^(1/2) (x / (x + 2 sqrt(6/5 - x^2 / 5)))^(1/4)`.
+fn thornton_printed_restitution(x: f64) -> f64 {
+    (6.0 * 3f64.sqrt() / 5.0).sqrt()
+        * (1.0 - x * x / 6.0).sqrt()
+        * (x / (x + 2.0 * (1.2 - 0.2 * x * x).sqrt())).powf(0.25)
+}
+
+/// The yield speed for a solid sphere, `V_y = (pi^4 / 40)^(1/2) (p_y^5 / (E*^4 rho))^(1/2)`
+/// (Thornton's 1.56), the peak force `F* = F_y (6/5 (u/V_y)^2 - 1/5)^(1/2)` and the
+/// restitution of the energy balance against Thornton's printed formula.
+#[test]
+fn closed_forms_match_thorntons_printed_formulas() {
+    let e_star = effective_modulus_pa(&Material64::COAL, &Material64::CARBON_STEEL);
+    let rho = Material64::COAL.density_kg_m3;
+    for p_y in [40e6_f64, 300e6] {
+        let vy = (core::f64::consts::PI.powi(4) / 40.0).sqrt()
+            * (p_y.powi(5) / (e_star.powi(4) * rho)).sqrt();
+        assert!(rel((core::f64::consts::PI.powi(4) / 40.0).sqrt(), 1.5605) < 5e-5);
+        for ratio in [1.01, 1.5, 3.0, 10.0, 100.0, 1000.0] {
+            let t = ThorntonImpact64::new(&coal(ratio * vy), p_y).expect("closed forms");
+            assert!(rel(t.yield_speed_m_s, vy) < 1e-12, "V_y {}", t.yield_speed_m_s);
+            let f_printed = t.yield_force_n * (1.2 * ratio * ratio - 0.2).sqrt();
+            assert!(rel(t.peak_force_n, f_printed) < 1e-12, "F* at u/V_y = {ratio}");
+            let e_printed = thornton_printed_restitution(1.0 / ratio);
+            assert!(rel(t.restitution, e_printed) < 1e-12, "e at u/V_y = {ratio}");
+        }
+    }
+    // Well above yield e ~ 1.1857 (V_y / u)^(1/4): (6 sqrt 3 / 5)^(1/2) (2 sqrt(6/5))^(-1/4).
+    let lim = (6.0 * 3f64.sqrt() / 5.0).sqrt() * (2.0 * 1.2f64.sqrt()).powf(-0.25);
+    let e = thornton_printed_restitution(1e-6);
+    assert!(rel(e, lim * 1e-6f64.powf(0.25)) < 1e-5, "{e} vs {lim}");
+}
+
+/// `B(w; 2/5, 1/2)` against the complete `B(2/5, 1/2) = 5/2 tau` and against a composite
+/// Simpson rule on `(2/5) B(w; 2/5, 1/2) = integral_0^(w^(2/5)) (1 - x^(5/2))^(-1/2) dx`,
+/// whose integrand is smooth for `w <= 0.9`.
+#[test]
+fn incomplete_beta_matches_quadrature() {
+    assert!(rel(incomplete_beta_2_5_1_2(1.0), 2.5 * HERTZ_TAU) < 1e-15);
+    for w in [0.01_f64, 0.3, 0.5, 0.7, 0.9] {
+        let top: f64 = w.powf(0.4);
+        let n = 200_000;
+        let h = top / n as f64;
+        let f = |x: f64| (1.0 - x.powf(2.5)).powf(-0.5);
+        let mut sum = f(0.0) + f(top);
+        for i in 1..n {
+            sum += f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 };
+        }
+        let simpson = sum * h / 3.0;
+        let series = 0.4 * incomplete_beta_2_5_1_2(w);
+        assert!(rel(series, simpson) < 1e-11, "w {w}: {series} vs {simpson}");
+    }
+}
+
+/// The integrator with Thornton's law against the closed forms: peak force, maximum
+/// penetration, restitution and contact time (to the residual penetration) to 1e-6, below,
+/// near and far above the yield speed; below yield it is the Hertz impact.
+#[test]
+fn integrator_matches_the_closed_forms() {
+    let p_y = 300e6;
+    for u in [0.5, 2.0, 2.5, 5.0, 20.0] {
+        let h = coal(u);
+        let t = ThorntonImpact64::new(&h, p_y).expect("closed forms");
+        let s = integrate(&h, thornton(p_y));
+        let e_sim = s.restitution();
+        println!(
+            "u {u} m/s (V_y {:.4}): F* {:.6} N, t_c {:.6e} s, e {:.8}; relative errors {:.1e}, \
+             {:.1e}, {:.1e}",
+            t.yield_speed_m_s,
+            t.peak_force_n,
+            t.duration_s,
+            t.restitution,
+            rel(s.peak_force_n, t.peak_force_n),
+            rel(s.duration_s, t.duration_s),
+            rel(e_sim, t.restitution)
+        );
+        assert!(rel(s.peak_force_n, t.peak_force_n) < 1e-6, "F* at {u}");
+        assert!(rel(s.delta_max_m, t.delta_max_m) < 1e-6, "delta* at {u}");
+        assert!(rel(e_sim, t.restitution) < 1e-6, "e at {u}");
+        assert!(rel(s.duration_s, t.duration_s) < 1e-6, "t_c at {u}");
+        if u < t.yield_speed_m_s {
+            assert!(rel(t.peak_force_n, h.peak_force_n) < 1e-12);
+            assert!(rel(t.duration_s, h.duration_s) < 1e-12);
+            assert_eq!(s.work.turns, 1);
+        }
+    }
+    // Deep in the plastic range (u / V_y ~ 230 for p_y = 40 MPa at 3 m/s).
+    let h = coal(3.0);
+    let t = ThorntonImpact64::new(&h, 40e6).expect("closed forms");
+    let s = integrate(&h, thornton(40e6));
+    assert!(rel(s.peak_force_n, t.peak_force_n) < 1e-6);
+    assert!(rel(s.restitution(), t.restitution) < 1e-6);
+    assert!(rel(s.duration_s, t.duration_s) < 1e-6);
+}
+
+/// With a hysteresis damping, yield and viscous loss combine: the restitution falls below both
+/// the undamped Thornton impact's and the elastic damped (Flores) impact's, and the force never
+/// pulls.
+#[test]
+fn damping_and_yield_combine() {
+    let h = coal(3.0);
+    let p_y = 300e6;
+    let plastic = integrate(&h, thornton(p_y)).restitution();
+    let viscous = integrate(
+        &h,
+        LawSpec::Flores {
+            restitution: 0.8,
+        },
+    )
+    .restitution();
+    let both = integrate(
+        &h,
+        LawSpec::Thornton {
+            yield_pressure_pa: p_y,
+            damping: Some((RestitutionModel::Flores, 0.8)),
+        },
+    );
+    println!("e: plastic {plastic:.4}, viscous {viscous:.4}, both {:.4}", both.restitution());
+    assert!(both.restitution() < plastic && both.restitution() < viscous);
+    let series = both.sample_force(both.duration_s / 2000.0).expect("series");
+    assert!(series.iter().all(|&(_, f)| f >= 0.0));
+}
