@@ -12,7 +12,7 @@
 //! Gauss-Legendre over `mu_x +- 9 sigma_x` cut to the box.
 
 /// `|det A|` of the map `(ln R, ln u) -> (ln F_max, ln t_c)`.
-const JACOBIAN: f64 = 1.6;
+pub const JACOBIAN: f64 = 1.6;
 
 /// One class in log feature space.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -195,11 +195,12 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<(PulseRatios, Vec<(f64, 
     ))
 }
 
-/// The calibration of `scene`'s contact law, or `None` for the undamped Hertz law (the
-/// kernel's own model: every ratio is 1). Integrates each class at radius {min, geometric
-/// centre, max} x speed {min, centre, max}.
+/// The calibration of `scene`'s contact law, or `None` for the undamped Hertz law with no
+/// yielding class (the kernel's own model: every ratio is 1). Integrates each class, with its
+/// own law ([`SceneFile::class_law`]), at radius {min, geometric centre, max} x speed {min,
+/// centre, max}.
 pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
-    if scene.contact == ContactLaw::Hertz {
+    if scene.contact == ContactLaw::Hertz && !scene.yields() {
         return Ok(None);
     }
     let plate = scene.plate.material();
@@ -207,12 +208,12 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     let mut skews = Vec::new();
     let mut bend = 0.0f64;
     let mut sampled = 0.0f64;
-    for class in &scene.classes {
+    for (i, class) in scene.classes.iter().enumerate() {
         let (r, u) = (class.radius_m, class.speed_range_m_s());
         for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
             for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
                 let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
-                spec.law = scene.contact.law_spec();
+                spec.law = scene.class_law(i)?;
                 let (ratios, series) = pulse_ratios_and_series(&spec)?;
                 bend = bend.max(sharpest_bend(&series, scene.sensor.sample_rate_hz));
                 skews.push(skewness(&series, 0.005));

@@ -10,7 +10,9 @@
 //!   (see `host_sim::caving`, `docs/caving.md`);
 //! - `host-sim identify`: the beam's modes and the accelerometer's resonance estimated from a
 //!   recorded stream (see `host_sim::identify`), printed as a `[sensor]` table;
-//! - `host-sim export`: a scene file as Rust source for a firmware (see `host_sim::export`).
+//! - `host-sim export`: a scene file as Rust source for a firmware (see `host_sim::export`);
+//! - `host-sim plasticity`: elastic against yielding contacts of a scene's classes (see
+//!   `host_sim::plasticity`, `docs/plasticity.md`).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -61,6 +63,9 @@ enum Command {
     /// Write a scene file as Rust source that a firmware includes: a function that builds the
     /// kernel scene exactly as host-sim does (exact f32 literals).
     Export(host_sim::export::ExportArgs),
+    /// Peak force, contact time and restitution against speed for a scene's yielding classes,
+    /// elastic against yielding (table, CSV and SVG).
+    Plasticity(host_sim::plasticity::PlasticityArgs),
 }
 
 /// Flags of `host-sim identify`.
@@ -277,6 +282,7 @@ fn main() -> Result<()> {
         Command::Identify(args) => run_identify(args),
         Command::Export(args) => host_sim::export::run(args),
         Command::Caving(args) => host_sim::caving_cli::run_cli(args),
+        Command::Plasticity(args) => host_sim::plasticity::run(args),
     }
 }
 

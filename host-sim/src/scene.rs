@@ -12,6 +12,8 @@
 //! radius_m = [0.015, 0.04]            # log-uniform prior on [min, max]
 //! speed_m_s = [1.0, 5.0]              # uniform prior; or drop_height_m = [h0, h1] (uniform height)
 //! prior = 1.0                         # relative share of impacts (default 1)
+//! # yield_pressure_pa = 40e6           # optional: the material's limiting contact pressure
+//!                                     # (Thornton); the class's contact then yields
 //!
 //! [contact]
 //! law = "hertz"                       # or hunt_crossley / lankarani_nikravesh / flores /
@@ -45,6 +47,8 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::hertz64::Material64;
 use crate::law_spec::LawSpec;
+use crate::laws::RestitutionModel;
+use crate::sim_error::SimError;
 
 /// Longest class name in bytes (the kernel's `coalshock::scene::NAME_LEN`).
 pub const MAX_CLASS_NAME_BYTES: usize = coalshock::scene::NAME_LEN;
@@ -345,6 +349,10 @@ pub struct ClassSpec {
     pub speed: SpeedSpec,
     /// Prior weight (relative share of impacts), finite and `> 0`; 1 when not given.
     pub prior: f64,
+    /// Limiting contact pressure `p_y` in Pa of the class's material against the plate
+    /// (Thornton 1997), if it yields: its contacts then follow [`LawSpec::Thornton`] with the
+    /// scene's restitution-law damping, if any. `None` (the default): elastic, as before.
+    pub yield_pressure_pa: Option<f64>,
 }
 
 /// A class as written in a file: exactly one of `speed_m_s` and `drop_height_m`.
@@ -360,6 +368,8 @@ struct ClassRaw {
     drop_height_m: Option<Range64>,
     #[serde(default = "one")]
     prior: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    yield_pressure_pa: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -392,6 +402,7 @@ impl TryFrom<ClassRaw> for ClassSpec {
             radius_m: r.radius_m,
             speed,
             prior: r.prior,
+            yield_pressure_pa: r.yield_pressure_pa,
         })
     }
 }
@@ -409,6 +420,7 @@ impl From<ClassSpec> for ClassRaw {
             speed_m_s,
             drop_height_m,
             prior: c.prior,
+            yield_pressure_pa: c.yield_pressure_pa,
         }
     }
 }
@@ -422,6 +434,7 @@ impl ClassSpec {
             radius_m,
             speed: SpeedSpec::Uniform(speed_m_s),
             prior: 1.0,
+            yield_pressure_pa: None,
         }
     }
 
@@ -450,6 +463,9 @@ impl ClassSpec {
         match self.speed {
             SpeedSpec::Uniform(s) => s.validate(&format!("{field}.speed_m_s"))?,
             SpeedSpec::DropHeight(h) => h.validate(&format!("{field}.drop_height_m"))?,
+        }
+        if let Some(p) = self.yield_pressure_pa {
+            positive(&format!("{field}.yield_pressure_pa"), p)?;
         }
         positive(&format!("{field}.prior"), self.prior)
     }
@@ -899,6 +915,11 @@ impl SceneFile {
             }
         }
         self.contact.validate()?;
+        for i in 0..self.classes.len() {
+            self.class_law(i).map_err(|e| {
+                SceneError::invalid(format!("classes[{i}].yield_pressure_pa"), e.to_string())
+            })?;
+        }
         self.sensor.validate()?;
         for (name, v) in [
             ("settings.trigger_sigmas", self.settings.trigger_sigmas),
@@ -913,6 +934,45 @@ impl SceneFile {
             }
         }
         Ok(())
+    }
+
+    /// The integrator's law for class `class`: the scene's [`ContactLaw`], or, when the class
+    /// states `yield_pressure_pa`, [`LawSpec::Thornton`] with the scene's restitution-law
+    /// damping (`None` for `law = "hertz"`). Errors, naming the field, for a yielding class
+    /// under a law whose damping is not of the restitution form (Adams, Tsuji).
+    pub fn class_law(&self, class: usize) -> Result<LawSpec, SimError> {
+        let Some(p_y) = self.classes.get(class).and_then(|c| c.yield_pressure_pa) else {
+            return Ok(self.contact.law_spec());
+        };
+        let damping = match self.contact {
+            ContactLaw::Hertz => None,
+            ContactLaw::HuntCrossley { restitution } => {
+                Some((RestitutionModel::HuntCrossley, restitution))
+            }
+            ContactLaw::LankaraniNikravesh { restitution } => {
+                Some((RestitutionModel::LankaraniNikravesh, restitution))
+            }
+            ContactLaw::Flores { restitution } => Some((RestitutionModel::Flores, restitution)),
+            ContactLaw::Gonthier { restitution } => Some((RestitutionModel::Gonthier, restitution)),
+            ContactLaw::Tsuji { .. } | ContactLaw::Adams { .. } | ContactLaw::AdamsRestitution { .. } => {
+                return Err(SimError::InvalidParameter {
+                    name: format!("classes[{class}].yield_pressure_pa"),
+                    value: p_y,
+                    requirement: "given with contact law hertz, hunt_crossley, \
+                                  lankarani_nikravesh, flores or gonthier (a yielding contact \
+                                  takes only their damping)",
+                });
+            }
+        };
+        Ok(LawSpec::Thornton {
+            yield_pressure_pa: p_y,
+            damping,
+        })
+    }
+
+    /// Whether any class yields (states `yield_pressure_pa`).
+    pub fn yields(&self) -> bool {
+        self.classes.iter().any(|c| c.yield_pressure_pa.is_some())
     }
 
     /// Prior weights normalised to sum 1, in class order.
@@ -985,6 +1045,41 @@ mod tests {
             .expect_err("unknown")
             .to_string();
         assert!(e.contains("unknown material") && e.contains("line"), "{e}");
+    }
+
+    /// A class may state its limiting contact pressure; without it the scene's law is used
+    /// unchanged, with it Thornton's law with the scene's restitution-law damping. A law whose
+    /// damping Thornton's law cannot take, or a bad value, is refused naming the field.
+    #[test]
+    fn yield_pressure_is_optional_and_names_its_field() {
+        let paper = SceneFile::paper();
+        assert!(!paper.yields());
+        assert_eq!(paper.class_law(1).expect("law"), LawSpec::Hertz);
+        let mut s = paper.clone();
+        s.classes[0].yield_pressure_pa = Some(3e7);
+        let text = s.to_toml_string().expect("serialize");
+        assert!(text.contains("yield_pressure_pa"), "{text}");
+        assert!(!paper.to_toml_string().expect("serialize").contains("yield"));
+        assert_eq!(SceneFile::from_toml_str(&text).expect("parse"), s);
+        s.contact = ContactLaw::Flores { restitution: 0.5 };
+        assert_eq!(
+            s.class_law(0).expect("law"),
+            LawSpec::Thornton {
+                yield_pressure_pa: 3e7,
+                damping: Some((RestitutionModel::Flores, 0.5)),
+            }
+        );
+        assert_eq!(
+            s.class_law(1).expect("law"),
+            LawSpec::Flores { restitution: 0.5 }
+        );
+        s.contact = ContactLaw::Tsuji { restitution: 0.5 };
+        let e = s.validate().expect_err("tsuji").to_string();
+        assert!(e.contains("classes[0].yield_pressure_pa"), "{e}");
+        s.contact = ContactLaw::Hertz;
+        s.classes[0].yield_pressure_pa = Some(-1.0);
+        let e = s.validate().expect_err("negative").to_string();
+        assert!(e.contains("classes[0].yield_pressure_pa"), "{e}");
     }
 
     #[test]

@@ -878,7 +878,7 @@ fn simulate_pulse(
         d.radius_m,
         d.speed_m_s,
     );
-    spec.law = scene.contact.law_spec();
+    spec.law = scene.class_law(d.class)?;
     let step_s = (d.hertz.duration_s / options.record_points_per_pulse as f64).min(fine_step_s);
     spec.record = Some(step_s);
     let report = simulate(&spec)?;
