@@ -166,3 +166,23 @@ fn damping_and_yield_combine() {
     let series = both.sample_force(both.duration_s / 2000.0).expect("series");
     assert!(series.iter().all(|&(_, f)| f >= 0.0));
 }
+
+/// For one material and limiting pressure the measured/Hertz ratios of `F_max` and `t_c` depend
+/// on the speed alone, not on the radius: the yield speed `V_y` does not depend on `R`, and
+/// every ratio is a function of `u / V_y` (and of `p_y / E*`). A yielding class's envelope is
+/// therefore the Hertz parallelogram bent by two functions of `ln u` only.
+#[test]
+fn ratios_to_hertz_do_not_depend_on_the_radius() {
+    let p_y = 30e6;
+    for u in [1.0, 2.5, 5.0] {
+        let ratio = |r: f64| {
+            let h = HertzImpact64::new(&Material64::COAL, &Material64::CARBON_STEEL, r, u)
+                .expect("valid");
+            let t = ThorntonImpact64::new(&h, p_y).expect("closed forms");
+            (t.peak_force_n / h.peak_force_n, t.duration_s / h.duration_s)
+        };
+        let (a, b) = (ratio(0.015), ratio(0.04));
+        println!("u {u}: F*/F_H {:.6}, t_c/t_H {:.6}", a.0, a.1);
+        assert!(rel(a.0, b.0) < 1e-12 && rel(a.1, b.1) < 1e-12, "{a:?} {b:?}");
+    }
+}
