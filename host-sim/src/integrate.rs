@@ -40,6 +40,13 @@
 //! `delta_max` is the root of `delta'` and the peak force the maximum of `F` over the
 //! continuous output, refined by golden-section search.
 //!
+//! A history-dependent law ([`ForceLaw::awaits_turn`]: Thornton's elastic-plastic contact)
+//! adds a fourth switching function, the rate `v`: where the penetration turns the step lands
+//! on `v = 0` (Newton), the law is replaced by [`ForceLaw::turned_at`] (its elastic unloading
+//! from that `delta_max`), and the contact ends at [`ForceLaw::contact_end_m`] (the residual
+//! dent) instead of `x = 0`; the kink at first yield, `delta_y`, is a kink like Adams'. Every
+//! other law never turns, and runs as before.
+//!
 //! # Stiffness
 //! The damped laws with large damping (for example Adams with `c_max` a percent of `k` in SI)
 //! make the equation stiff: `c/m` times the contact time reaches 1e4. An explicit method then

@@ -8,6 +8,8 @@ use host_sim::integrate::{ContactProblem, ContactSolution, Limits, Method, Toler
 use host_sim::integrate::integrate_contact;
 use host_sim::law_spec::LawSpec;
 use host_sim::laws::RestitutionModel;
+use host_sim::calibrate::calibrate;
+use host_sim::scene;
 use host_sim::thornton::{ThorntonImpact64, incomplete_beta_2_5_1_2};
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -141,30 +143,54 @@ fn integrator_matches_the_closed_forms() {
 
 /// With a hysteresis damping, yield and viscous loss combine: the restitution falls below both
 /// the undamped Thornton impact's and the elastic damped (Flores) impact's, and the force never
-/// pulls.
+/// pulls (with e = 0.3 the clamp at zero engages before the dent is left).
 #[test]
 fn damping_and_yield_combine() {
     let h = coal(3.0);
-    let p_y = 300e6;
+    let p_y = 100e6;
     let plastic = integrate(&h, thornton(p_y)).restitution();
-    let viscous = integrate(
-        &h,
-        LawSpec::Flores {
-            restitution: 0.8,
-        },
-    )
-    .restitution();
-    let both = integrate(
-        &h,
-        LawSpec::Thornton {
-            yield_pressure_pa: p_y,
-            damping: Some((RestitutionModel::Flores, 0.8)),
-        },
-    );
-    println!("e: plastic {plastic:.4}, viscous {viscous:.4}, both {:.4}", both.restitution());
-    assert!(both.restitution() < plastic && both.restitution() < viscous);
-    let series = both.sample_force(both.duration_s / 2000.0).expect("series");
-    assert!(series.iter().all(|&(_, f)| f >= 0.0));
+    for e in [0.8, 0.3] {
+        let viscous = integrate(&h, LawSpec::Flores { restitution: e }).restitution();
+        let both = integrate(
+            &h,
+            LawSpec::Thornton {
+                yield_pressure_pa: p_y,
+                damping: Some((RestitutionModel::Flores, e)),
+            },
+        );
+        println!(
+            "e target {e}: plastic {plastic:.4}, viscous {viscous:.4}, both {:.4}",
+            both.restitution()
+        );
+        assert!(both.restitution() < plastic && both.restitution() < viscous);
+        let series = both.sample_force(both.duration_s / 2000.0).expect("series");
+        assert!(series.iter().all(|&(_, f)| f >= 0.0));
+    }
+}
+
+/// The calibration of the yielding paper scene integrates each class with its own law: its
+/// geometric-mean force ratio is that of Thornton's closed forms over the same 18 impacts.
+#[test]
+fn calibration_follows_the_class_laws() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/paper_yield.toml");
+    let s = scene::load(&path).expect("shipped scene");
+    let cal = calibrate(&s).expect("integrates").expect("a yielding scene calibrates");
+    let mut sum = 0.0;
+    for c in &s.classes {
+        let p_y = c.yield_pressure_pa.expect("both classes yield");
+        let (r, u) = (c.radius_m, c.speed_range_m_s());
+        for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
+            for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
+                let h = HertzImpact64::new(&c.material.material(), &s.plate.material(), radius, speed)
+                    .expect("valid");
+                let t = ThorntonImpact64::new(&h, p_y).expect("closed forms");
+                sum += (t.peak_force_n / h.peak_force_n).ln();
+            }
+        }
+    }
+    let expected = (sum / 18.0).exp();
+    println!("force ratio {:.6} (closed forms {expected:.6})", cal.ratios.force);
+    assert!(rel(cal.ratios.force, expected) < 1e-6);
 }
 
 /// For one material and limiting pressure the measured/Hertz ratios of `F_max` and `t_c` depend
