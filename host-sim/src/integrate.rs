@@ -561,7 +561,14 @@ fn find_event(
         |p: Quartic, a: f64| earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0);
     // At first contact x(0) = 0: that root is the start, not an end.
     let x_rel = x.minus(x_end);
-    let end = poly_root(x_rel, if x_rel.0[0] == 0.0 { RESTART_THETA } else { 0.0 });
+    let end = poly_root(
+        x_rel,
+        if x_rel.0[0] == 0.0 {
+            RESTART_THETA
+        } else {
+            0.0
+        },
+    );
     let turn = if await_turn {
         let v = seg.quartic(1);
         poly_root(v, if v.0[0] == 0.0 { RESTART_THETA } else { 0.0 })
@@ -583,7 +590,9 @@ fn find_event(
     let first = [end, kink, turn]
         .into_iter()
         .flatten()
-        .fold(None, |acc: Option<f64>, th| Some(acc.map_or(th, |a| a.min(th))));
+        .fold(None, |acc: Option<f64>, th| {
+            Some(acc.map_or(th, |a| a.min(th)))
+        });
     let hi = first.unwrap_or(1.0);
     let switch = clamp.filter(|_| clamp_budget > 0).and_then(|sw| {
         let v = seg.quartic(1);

@@ -281,10 +281,7 @@ impl ForceLaw {
                     stiffness * d_hi.powf(1.25) + c0 * delta_dot.1,
                 )
             }
-            Self::Thornton(t) => (
-                t.damping_factor(delta_dot.0),
-                t.damping_factor(delta_dot.1),
-            ),
+            Self::Thornton(t) => (t.damping_factor(delta_dot.0), t.damping_factor(delta_dot.1)),
         }
     }
 

@@ -129,8 +129,8 @@ pub fn sweep(
 
 /// Writes the sweep as CSV to `path`.
 fn write_csv(rows: &[SweepRow], path: &Path) -> anyhow::Result<()> {
-    let mut w = csv::Writer::from_path(path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    let mut w =
+        csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
     w.write_record([
         "class",
         "radius_m",
@@ -229,14 +229,36 @@ fn write_svgs(rows: &[SweepRow], dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
         ]
     };
     let specs = [
-        (SVG_FILES[0], "Peak force against speed", "peak force F_max (kN)", force),
-        (SVG_FILES[1], "Contact time against speed", "contact time t_c (us)", duration),
-        (SVG_FILES[2], "Restitution against speed", "coefficient of restitution e", restitution),
+        (
+            SVG_FILES[0],
+            "Peak force against speed",
+            "peak force F_max (kN)",
+            force,
+        ),
+        (
+            SVG_FILES[1],
+            "Contact time against speed",
+            "contact time t_c (us)",
+            duration,
+        ),
+        (
+            SVG_FILES[2],
+            "Restitution against speed",
+            "coefficient of restitution e",
+            restitution,
+        ),
     ];
     let mut paths = Vec::new();
     for (file, caption, y_label, pick) in specs {
         let path = dir.join(file);
-        draw_svg(&path, caption, "impact speed u (m/s)", y_label, &curves(rows, pick), true)?;
+        draw_svg(
+            &path,
+            caption,
+            "impact speed u (m/s)",
+            y_label,
+            &curves(rows, pick),
+            true,
+        )?;
         paths.push(path);
     }
     Ok(paths)
@@ -276,7 +298,7 @@ pub fn run(args: &PlasticityArgs) -> anyhow::Result<()> {
     for (_, r) in rows
         .iter()
         .enumerate()
-        .filter(|(i, _)| (i % args.points) % every == 0)
+        .filter(|(i, _)| (i % args.points).is_multiple_of(every))
     {
         println!(
             "{}  {:.4}  {:.2}  {:.0}  {:.0}  {:.1}  {:.1}  {:.3}",

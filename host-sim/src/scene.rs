@@ -954,7 +954,9 @@ impl SceneFile {
             }
             ContactLaw::Flores { restitution } => Some((RestitutionModel::Flores, restitution)),
             ContactLaw::Gonthier { restitution } => Some((RestitutionModel::Gonthier, restitution)),
-            ContactLaw::Tsuji { .. } | ContactLaw::Adams { .. } | ContactLaw::AdamsRestitution { .. } => {
+            ContactLaw::Tsuji { .. }
+            | ContactLaw::Adams { .. }
+            | ContactLaw::AdamsRestitution { .. } => {
                 return Err(SimError::InvalidParameter {
                     name: format!("classes[{class}].yield_pressure_pa"),
                     value: p_y,

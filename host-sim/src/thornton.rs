@@ -64,7 +64,8 @@ impl ThorntonContact {
 
     /// Penetration at first yield `delta_y = R (pi p_y / (2 E*))^2` in m.
     pub fn yield_penetration_m(&self) -> f64 {
-        let r = core::f64::consts::PI * self.yield_pressure_pa / (2.0 * self.effective_modulus_pa());
+        let r =
+            core::f64::consts::PI * self.yield_pressure_pa / (2.0 * self.effective_modulus_pa());
         self.radius_m * r * r
     }
 
@@ -100,7 +101,11 @@ impl ThorntonContact {
         match self.unloading {
             Some(u) if delta_m <= u.delta_max_m => {
                 let s = delta_m - u.residual_m;
-                if s > 0.0 { u.stiffness * s * s.sqrt() } else { 0.0 }
+                if s > 0.0 {
+                    u.stiffness * s * s.sqrt()
+                } else {
+                    0.0
+                }
             }
             _ => self.loading_force_n(delta_m),
         }
@@ -224,11 +229,14 @@ impl ThorntonImpact64 {
         } else {
             (hertz.delta_max_m, 0.5 * hertz.duration_s, 0.0)
         };
-        let unl = law.unloaded_from(delta_max_m).unloading.unwrap_or(Unloading {
-            delta_max_m,
-            residual_m: 0.0,
-            stiffness: k,
-        });
+        let unl = law
+            .unloaded_from(delta_max_m)
+            .unloading
+            .unwrap_or(Unloading {
+                delta_max_m,
+                residual_m: 0.0,
+                stiffness: k,
+            });
         let peak_force_n = law.loading_force_n(delta_max_m);
         let s = delta_max_m - unl.residual_m;
         let restitution = (0.4 * peak_force_n * s / (0.5 * m * u * u)).sqrt();

@@ -194,7 +194,8 @@ mod tests {
                 let (a, b) = (yc.density(f), m.density(f.0, f.1));
                 assert!((a - b).abs() <= 1e-6 * b.max(1e-300) || (a == 0.0 && b == 0.0));
             }
-            agree += usize::from(decide(&classes, f) == crate::bayes::decide(&models, f.0, f.1, None));
+            agree +=
+                usize::from(decide(&classes, f) == crate::bayes::decide(&models, f.0, f.1, None));
         }
         assert_eq!(agree, 400);
     }

@@ -3,12 +3,12 @@
 //!
 //! Run with `--nocapture` to see the measured figures.
 
+use host_sim::calibrate::calibrate;
 use host_sim::hertz64::{HERTZ_TAU, HertzImpact64, Material64, effective_modulus_pa};
-use host_sim::integrate::{ContactProblem, ContactSolution, Limits, Method, Tolerance};
 use host_sim::integrate::integrate_contact;
+use host_sim::integrate::{ContactProblem, ContactSolution, Limits, Method, Tolerance};
 use host_sim::law_spec::LawSpec;
 use host_sim::laws::RestitutionModel;
-use host_sim::calibrate::calibrate;
 use host_sim::scene;
 use host_sim::thornton::{ThorntonImpact64, incomplete_beta_2_5_1_2};
 
@@ -18,8 +18,13 @@ fn rel(a: f64, b: f64) -> f64 {
 
 /// Coal of the paper (R = 0.03 m) on carbon steel at `speed_m_s`.
 fn coal(speed_m_s: f64) -> HertzImpact64 {
-    HertzImpact64::new(&Material64::COAL, &Material64::CARBON_STEEL, 0.03, speed_m_s)
-        .expect("valid scene")
+    HertzImpact64::new(
+        &Material64::COAL,
+        &Material64::CARBON_STEEL,
+        0.03,
+        speed_m_s,
+    )
+    .expect("valid scene")
 }
 
 fn integrate(h: &HertzImpact64, spec: LawSpec) -> ContactSolution {
@@ -66,11 +71,21 @@ fn closed_forms_match_thorntons_printed_formulas() {
         assert!(rel((core::f64::consts::PI.powi(4) / 40.0).sqrt(), 1.5605) < 5e-5);
         for ratio in [1.01, 1.5, 3.0, 10.0, 100.0, 1000.0] {
             let t = ThorntonImpact64::new(&coal(ratio * vy), p_y).expect("closed forms");
-            assert!(rel(t.yield_speed_m_s, vy) < 1e-12, "V_y {}", t.yield_speed_m_s);
+            assert!(
+                rel(t.yield_speed_m_s, vy) < 1e-12,
+                "V_y {}",
+                t.yield_speed_m_s
+            );
             let f_printed = t.yield_force_n * (1.2 * ratio * ratio - 0.2).sqrt();
-            assert!(rel(t.peak_force_n, f_printed) < 1e-12, "F* at u/V_y = {ratio}");
+            assert!(
+                rel(t.peak_force_n, f_printed) < 1e-12,
+                "F* at u/V_y = {ratio}"
+            );
             let e_printed = thornton_printed_restitution(1.0 / ratio);
-            assert!(rel(t.restitution, e_printed) < 1e-12, "e at u/V_y = {ratio}");
+            assert!(
+                rel(t.restitution, e_printed) < 1e-12,
+                "e at u/V_y = {ratio}"
+            );
         }
     }
     // Well above yield e ~ 1.1857 (V_y / u)^(1/4): (6 sqrt 3 / 5)^(1/2) (2 sqrt(6/5))^(-1/4).
@@ -174,22 +189,28 @@ fn damping_and_yield_combine() {
 fn calibration_follows_the_class_laws() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/paper_yield.toml");
     let s = scene::load(&path).expect("shipped scene");
-    let cal = calibrate(&s).expect("integrates").expect("a yielding scene calibrates");
+    let cal = calibrate(&s)
+        .expect("integrates")
+        .expect("a yielding scene calibrates");
     let mut sum = 0.0;
     for c in &s.classes {
         let p_y = c.yield_pressure_pa.expect("both classes yield");
         let (r, u) = (c.radius_m, c.speed_range_m_s());
         for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
             for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
-                let h = HertzImpact64::new(&c.material.material(), &s.plate.material(), radius, speed)
-                    .expect("valid");
+                let h =
+                    HertzImpact64::new(&c.material.material(), &s.plate.material(), radius, speed)
+                        .expect("valid");
                 let t = ThorntonImpact64::new(&h, p_y).expect("closed forms");
                 sum += (t.peak_force_n / h.peak_force_n).ln();
             }
         }
     }
     let expected = (sum / 18.0).exp();
-    println!("force ratio {:.6} (closed forms {expected:.6})", cal.ratios.force);
+    println!(
+        "force ratio {:.6} (closed forms {expected:.6})",
+        cal.ratios.force
+    );
     assert!(rel(cal.ratios.force, expected) < 1e-6);
 }
 
@@ -209,6 +230,9 @@ fn ratios_to_hertz_do_not_depend_on_the_radius() {
         };
         let (a, b) = (ratio(0.015), ratio(0.04));
         println!("u {u}: F*/F_H {:.6}, t_c/t_H {:.6}", a.0, a.1);
-        assert!(rel(a.0, b.0) < 1e-12 && rel(a.1, b.1) < 1e-12, "{a:?} {b:?}");
+        assert!(
+            rel(a.0, b.0) < 1e-12 && rel(a.1, b.1) < 1e-12,
+            "{a:?} {b:?}"
+        );
     }
 }
