@@ -90,6 +90,19 @@ pub(crate) fn positive(name: &str, value: f64) -> Result<(), SimError> {
     }
 }
 
+/// `Ok` if `value` is finite and >= 0, else an [`SimError::InvalidParameter`] naming `name`.
+pub(crate) fn non_negative(name: &str, value: f64) -> Result<(), SimError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(SimError::InvalidParameter {
+            name: name.to_string(),
+            value,
+            requirement: "finite and >= 0",
+        })
+    }
+}
+
 /// Effective modulus `E* = 1 / ((1 - nu1^2)/E1 + (1 - nu2^2)/E2)` in Pa.
 pub fn effective_modulus_pa(a: &Material64, b: &Material64) -> f64 {
     1.0 / ((1.0 - a.poisson * a.poisson) / a.modulus_pa

@@ -11,7 +11,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::hertz64::positive;
+use crate::hertz64::{non_negative, positive};
 use crate::sim_error::SimError;
 use crate::thornton::ThorntonContact;
 
@@ -459,18 +459,6 @@ fn mul_bounds(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
     let lo = p.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     (lo, hi)
-}
-
-fn non_negative(name: &str, value: f64) -> Result<(), SimError> {
-    if value.is_finite() && value >= 0.0 {
-        Ok(())
-    } else {
-        Err(SimError::InvalidParameter {
-            name: name.to_string(),
-            value,
-            requirement: "finite and >= 0",
-        })
-    }
 }
 
 fn check_restitution(e: f64) -> Result<(), SimError> {

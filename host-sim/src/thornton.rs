@@ -25,7 +25,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::hertz64::{HERTZ_TAU, HertzImpact64, positive};
+use crate::hertz64::{HERTZ_TAU, HertzImpact64, non_negative, positive};
 use crate::sim_error::SimError;
 
 /// The elastic unloading branch fixed at the turnaround of the penetration.
@@ -150,14 +150,7 @@ impl ThorntonContact {
         positive("law.radius_m", self.radius_m)?;
         positive("law.yield_pressure_pa", self.yield_pressure_pa)?;
         positive("law.impact_speed_m_s", self.impact_speed_m_s)?;
-        if !(self.chi.is_finite() && self.chi >= 0.0) {
-            return Err(SimError::InvalidParameter {
-                name: "law.chi".to_string(),
-                value: self.chi,
-                requirement: "finite and >= 0",
-            });
-        }
-        Ok(())
+        non_negative("law.chi", self.chi)
     }
 }
 
