@@ -22,6 +22,7 @@ pub mod material;
 pub mod math;
 pub mod monitor;
 pub mod scene;
+pub mod thornton;
 
 pub use classifier::{Measurement, RejectReason, Verdict};
 pub use counters::Counters;

@@ -216,8 +216,8 @@ fn calibration_follows_the_class_laws() {
 
 /// For one material and limiting pressure the measured/Hertz ratios of `F_max` and `t_c` depend
 /// on the speed alone, not on the radius: the yield speed `V_y` does not depend on `R`, and
-/// every ratio is a function of `u / V_y` (and of `p_y / E*`). A yielding class's envelope is
-/// therefore the Hertz parallelogram bent by two functions of `ln u` only.
+/// every ratio is a function of `u / V_y` alone. A yielding class's envelope is therefore the
+/// Hertz parallelogram bent by two functions of `ln u` only.
 #[test]
 fn ratios_to_hertz_do_not_depend_on_the_radius() {
     let p_y = 30e6;
@@ -235,4 +235,42 @@ fn ratios_to_hertz_do_not_depend_on_the_radius() {
             "{a:?} {b:?}"
         );
     }
+}
+
+/// The kernel's f32 ratios (`coalshock::thornton`) against host-sim's integrator of the same
+/// law: peak force, contact time and restitution over Hertz, below, near and far above yield,
+/// to f32 precision (2e-6 relative); the kernel's yield speed against the f64 closed form.
+#[test]
+fn kernel_ratios_match_the_integrator() {
+    use coalshock::math::DefaultBackend;
+    use coalshock::thornton::{ratios_in, yield_speed_in};
+    let e_star = effective_modulus_pa(&Material64::COAL, &Material64::CARBON_STEEL);
+    let rho = Material64::COAL.density_kg_m3;
+    let mut worst = 0.0_f64;
+    for p_y in [30e6_f64, 300e6] {
+        let vy = yield_speed_in::<DefaultBackend>(e_star as f32, rho as f32, p_y as f32)
+            .expect("yield speed");
+        let vy64 = ThorntonImpact64::new(&coal(1.0), p_y)
+            .expect("closed forms")
+            .yield_speed_m_s;
+        assert!(rel(f64::from(vy), vy64) < 2e-6, "V_y {vy} vs {vy64}");
+        for u in [0.5, 1.0, 2.5, 5.0, 20.0] {
+            let h = coal(u);
+            let s = integrate(&h, thornton(p_y));
+            let k = ratios_in::<DefaultBackend>((vy64 / u) as f32).expect("ratios");
+            let pairs = [
+                (k.force, s.peak_force_n / h.peak_force_n),
+                (k.duration, s.duration_s / h.duration_s),
+                (k.restitution, s.restitution()),
+            ];
+            for (kernel, sim) in pairs {
+                worst = worst.max(rel(f64::from(kernel), sim));
+                assert!(
+                    rel(f64::from(kernel), sim) < 2e-6,
+                    "p_y {p_y} u {u}: {kernel} vs {sim}"
+                );
+            }
+        }
+    }
+    println!("kernel ratios: worst relative error {worst:.1e}");
 }

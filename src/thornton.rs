@@ -1,0 +1,108 @@
+//! Thornton's elastic-perfectly-plastic impact in f32: how far a yielding class's peak force,
+//! contact time and restitution fall from the Hertz impact, as functions of `s = V_y / u`
+//! alone.
+//!
+//! Thornton (J. Appl. Mech. 64 (1997) 383): Hertz loading up to the limiting contact pressure
+//! `p_y`, linear plastic loading `F = F_y + pi p_y R (delta - delta_y)`, elastic unloading from
+//! the flattened radius. The yield speed `V_y = (pi^4/40)^(1/2) (p_y^5 / (E*^4 rho))^(1/2)`
+//! does not depend on the radius, and in units of the Hertz impact at the same `(R, u)` every
+//! phase depends on `s = V_y / u` only (for `s >= 1` the impact stays elastic: all ratios 1).
+//! With `q = F*/F_y = (6/5 s^-2 - 1/5)^(1/2)` and `d = delta*/delta_y = (1 + 2 q) / 3`:
+//!
+//! - `F*/F_Hertz = s^(1/5) (6/5 - s^2/5)^(1/2)`;
+//! - `e = q s / d^(1/4)` (Thornton's restitution, from the energy balance);
+//! - `t_c/t_Hertz = [(2/5) B(s^2; 2/5, 1/2) + s^(-1/5) atan((6/5 (s^-2 - 1))^(1/2)) /
+//!   (15/8)^(1/2)] / (2 tau) + q s^(4/5) / (2 e d^(1/2))`, the three phases (Hertz loading,
+//!   a harmonic arc, half a Hertz contact of the flattened radius), `tau = 1.4716376`.
+//!
+//! host-sim checks these against its integrator of the same law (`host-sim/tests/thornton.rs`).
+
+use crate::error::{Error, positive, representable};
+use crate::hertz::CONTACT_TIME_FACTOR;
+use crate::math::Backend;
+
+/// `(pi^4 / 40)^(1/2)`: `V_y = 1.5605215 (p_y^5 / (E*^4 rho))^(1/2)`.
+pub const YIELD_SPEED_FACTOR: f32 = 1.560_521_5;
+
+/// `B(2/5, 1/2) = (5/2) tau`.
+const BETA_2_5_1_2: f32 = 2.5 * (CONTACT_TIME_FACTOR / 2.0);
+
+/// Terms of the incomplete beta series at most (ratio `<= 1/2`: `2^-40` is below f32's
+/// resolution).
+const SERIES_TERMS: u32 = 40;
+
+/// A yielding impact's ratios to the Hertz impact of the same radius and speed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct YieldRatios {
+    /// `F* / F_Hertz` (dimensionless, `<= 1`).
+    pub force: f32,
+    /// `t_c / t_Hertz` (dimensionless, `>= 1` in practice).
+    pub duration: f32,
+    /// Coefficient of restitution `e` (dimensionless, 1 when elastic).
+    pub restitution: f32,
+}
+
+/// Yield speed `V_y = 1.5605215 (p_y^5 / (E*^4 rho))^(1/2)` in m/s, computed as
+/// `1.5605215 (p_y / E*)^2 (p_y / rho)^(1/2)` so that no power of a pressure leaves f32
+/// (`E*` and `p_y` in Pa, `rho` in kg/m^3).
+pub fn yield_speed_in<M: Backend>(
+    effective_modulus_pa: f32,
+    density_kg_m3: f32,
+    yield_pressure_pa: f32,
+) -> Result<f32, Error> {
+    let e = positive(effective_modulus_pa, "effective_modulus_pa")?;
+    let rho = positive(density_kg_m3, "density_kg_m3")?;
+    let p = positive(yield_pressure_pa, "yield_pressure_pa")?;
+    let ratio = representable(p / e, "yield pressure / modulus")?;
+    let root = M::sqrt(representable(p / rho, "yield pressure / density")?);
+    representable(YIELD_SPEED_FACTOR * ratio * ratio * root, "yield speed")
+}
+
+/// The ratios at `s = V_y / u` (see the module docs); all 1 for `s >= 1`.
+pub fn ratios_in<M: Backend>(speed_ratio: f32) -> Result<YieldRatios, Error> {
+    let s = positive(speed_ratio, "yield speed / impact speed")?;
+    if s >= 1.0 {
+        return Ok(YieldRatios {
+            force: 1.0,
+            duration: 1.0,
+            restitution: 1.0,
+        });
+    }
+    let s2 = s * s;
+    let q = M::sqrt(1.2 / s2 - 0.2);
+    let d = (1.0 + 2.0 * q) / 3.0;
+    let force = M::powf(s, 0.2) * M::sqrt(1.2 - 0.2 * s2);
+    let restitution = q * s / M::sqrt(M::sqrt(d));
+    let elastic = 0.4 * incomplete_beta_2_5_1_2(s2, M::powf);
+    let plastic = libm::atanf(M::sqrt(1.2 * (1.0 / s2 - 1.0))) / (M::powf(s, 0.2) * 1.369_306_4);
+    let unloading = q * M::powf(s, 0.8) / (2.0 * restitution * M::sqrt(d));
+    let duration = (elastic + plastic) / CONTACT_TIME_FACTOR + unloading;
+    Ok(YieldRatios {
+        force: representable(force, "yield force ratio")?,
+        duration: representable(duration, "yield duration ratio")?,
+        restitution: representable(restitution, "restitution")?,
+    })
+}
+
+/// `B(w; 2/5, 1/2) = integral_0^w t^(-3/5) (1 - t)^(-1/2) dt` for `w` in `[0, 1]`: the series
+/// `w^a sum_n (1 - b)_n w^n / (n! (a + n))` for `w <= 1/2`, else `B(a, b) - B(1 - w; b, a)`.
+fn incomplete_beta_2_5_1_2(w: f32, powf: fn(f32, f32) -> f32) -> f32 {
+    let w = w.max(0.0).min(1.0);
+    if w <= 0.5 {
+        beta_series(w, 0.4, 0.5, powf)
+    } else {
+        BETA_2_5_1_2 - beta_series(1.0 - w, 0.5, 0.4, powf)
+    }
+}
+
+/// `w^a sum_{n < 40} (1 - b)_n w^n / (n! (a + n))` for `0 <= w <= 1/2`.
+fn beta_series(w: f32, a: f32, b: f32, powf: fn(f32, f32) -> f32) -> f32 {
+    let (mut term, mut sum) = (1.0_f32, 1.0 / a);
+    for n in 0..SERIES_TERMS {
+        let nf = n as f32;
+        term *= (nf + 1.0 - b) * w / (nf + 1.0);
+        sum += term / (a + nf + 1.0);
+    }
+    if w > 0.0 { powf(w, a) * sum } else { 0.0 }
+}
