@@ -51,11 +51,10 @@ pub fn yield_speed_in<M: Backend>(
     density_kg_m3: f32,
     yield_pressure_pa: f32,
 ) -> Result<f32, Error> {
-    let e = positive(effective_modulus_pa, "effective_modulus_pa")?;
-    let rho = positive(density_kg_m3, "density_kg_m3")?;
     let p = positive(yield_pressure_pa, "yield_pressure_pa")?;
-    let ratio = representable(p / e, "yield pressure / modulus")?;
-    let root = M::sqrt(representable(p / rho, "yield pressure / density")?);
+    let over = |x: f32, what| positive(x, what).and_then(|x| representable(p / x, what));
+    let ratio = over(effective_modulus_pa, "effective_modulus_pa")?;
+    let root = M::sqrt(over(density_kg_m3, "density_kg_m3")?);
     representable(YIELD_SPEED_FACTOR * ratio * ratio * root, "yield speed")
 }
 
@@ -105,4 +104,33 @@ fn beta_series(w: f32, a: f32, b: f32, powf: fn(f32, f32) -> f32) -> f32 {
         sum += term / (a + nf + 1.0);
     }
     if w > 0.0 { powf(w, a) * sum } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::DefaultBackend as M;
+
+    /// Bad inputs are typed errors; at and below yield the impact is elastic; far above it
+    /// the restitution follows Thornton's limit `1.1857 (V_y / u)^(1/4)` and the force ratio
+    /// `(6/5)^(1/2) s^(1/5)`.
+    #[test]
+    fn limits_and_errors() {
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(ratios_in::<M>(bad).is_err());
+            assert!(yield_speed_in::<M>(5e9, 1380.0, bad).is_err());
+        }
+        let one = ratios_in::<M>(1.0).expect("elastic");
+        assert_eq!((one.force, one.duration, one.restitution), (1.0, 1.0, 1.0));
+        let s = 1e-6_f32;
+        let r = ratios_in::<M>(s).expect("plastic");
+        let e_lim = 1.185_7 * M::powf(s, 0.25);
+        assert!(
+            (r.restitution / e_lim - 1.0).abs() < 1e-3,
+            "{}",
+            r.restitution
+        );
+        let f_lim = M::sqrt(1.2) * M::powf(s, 0.2);
+        assert!((r.force / f_lim - 1.0).abs() < 1e-5, "{}", r.force);
+    }
 }
