@@ -120,10 +120,14 @@ mod tests {
             assert!(ratios_in::<M>(bad).is_err());
             assert!(yield_speed_in::<M>(5e9, 1380.0, bad).is_err());
         }
-        let one = ratios_in::<M>(1.0).expect("elastic");
+        let Ok(one) = ratios_in::<M>(1.0) else {
+            unreachable!("s = 1 is valid")
+        };
         assert_eq!((one.force, one.duration, one.restitution), (1.0, 1.0, 1.0));
         let s = 1e-6_f32;
-        let r = ratios_in::<M>(s).expect("plastic");
+        let Ok(r) = ratios_in::<M>(s) else {
+            unreachable!("s = 1e-6 is valid")
+        };
         let e_lim = 1.185_7 * M::powf(s, 0.25);
         assert!(
             (r.restitution / e_lim - 1.0).abs() < 1e-3,
