@@ -109,7 +109,7 @@ fn beta_series(w: f32, a: f32, b: f32, powf: fn(f32, f32) -> f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{Backend as _, DefaultBackend as M};
+    use crate::math::DefaultBackend as M;
 
     /// Bad inputs are typed errors; at and below yield the impact is elastic; far above it
     /// the restitution follows Thornton's limit `1.1857 (V_y / u)^(1/4)` and the force ratio
