@@ -134,7 +134,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// Classifies a measured pulse.
     ///
     /// The noise of `ln F_max` and `ln t_c` is the measurement's own combined in quadrature with
-    /// the scene's `model_sigma`. If the pulse is more than `out_sigmas` outside every envelope
+    /// the scene's `model_sigma`, and with the bias a chain known only to its tolerance can
+    /// leave at the pulse's duration ([`Scene::chain_bias`]). If the pulse is more than `out_sigmas` outside every envelope
     /// it is `OutOfEnvelope` (with the nearest class); otherwise the posterior of class `c` is
     /// `prior_c L_c / sum_j prior_j L_j` with `L` from [`crate::envelope::Envelope::ln_likelihood`],
     /// and the best class is reported as `Class` when its posterior reaches `confidence`, else
@@ -178,9 +179,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let lf = M::ln(m.peak_force_n);
         let lt = M::ln(m.duration_s);
         let noise = NoiseXy::new::<M>(sf, st);
+        let wide = noise.with_chain_bias::<M>(self.chain_bias().bias_ln_force(lt));
 
-        let mut nearest = 0u8;
-        let mut nearest_d = f32::INFINITY;
+        let n = self.envelopes().len();
+        let (mut nearest, mut nearest_d) = (0u8, f32::INFINITY);
         let mut best = 0u8;
         let mut best_ll = f32::NEG_INFINITY;
         let mut lls = [f32::NEG_INFINITY; crate::scene::MAX_CLASSES];
@@ -193,22 +195,27 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             .zip(class_lls.iter_mut())
             .enumerate()
         {
-            let d = env.outside_sigmas_squared(lf, lt, noise);
+            let d = env.outside_sigmas_squared(lf, lt, wide);
             if d < nearest_d {
                 nearest_d = d;
                 nearest = i as u8;
             }
-            *raw = env.ln_likelihood::<M>(lf, lt, noise);
-            let ll = *raw + lp;
-            *slot = ll;
+            *raw = env.ln_likelihood::<M>(lf, lt, wide);
+            *slot = *raw + lp;
+            // The class is chosen on the measurement's own noise (the Bayes choice when the
+            // chain is right); the chain's tolerance only lowers how sure the verdict is.
+            let ll = if wide == noise {
+                *slot
+            } else {
+                env.ln_likelihood::<M>(lf, lt, noise) + lp
+            };
             if ll > best_ll {
                 best_ll = ll;
                 best = i as u8;
             }
         }
-        if nearest_d > s.out_sigmas * s.out_sigmas
-            || best_ll == f32::NEG_INFINITY
-            || !best_ll.is_finite()
+        let best_wide = lls.get(best as usize).copied().unwrap_or(f32::NEG_INFINITY);
+        if nearest_d > s.out_sigmas * s.out_sigmas || !best_ll.is_finite() || !best_wide.is_finite()
         {
             let inv = self.invert(nearest, m);
             let verdict = Verdict::OutOfEnvelope {
@@ -218,10 +225,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             };
             return (verdict, Some(class_lls));
         }
-        // Posterior of the best class by log-sum-exp.
-        let n = self.envelopes().len();
-        let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - best_ll)).sum();
-        let posterior = 1.0 / sum;
+        // Posterior of the chosen class by log-sum-exp, on the widened noise.
+        let top = lls.iter().take(n).fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+        let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - top)).sum();
+        let posterior = M::exp(best_wide - top) / sum;
         let verdict = if posterior >= s.confidence {
             Verdict::Class {
                 class: best,

@@ -21,6 +21,11 @@ pub const JACOBIAN: f32 = 1.6;
 /// Smallest standard deviation (in log units) the likelihood uses, so it stays finite.
 const MIN_SIGMA: f32 = 1e-4;
 
+/// Largest standard deviation of `ln R` or `ln u` the likelihood uses (a factor `e^4 = 55`,
+/// more than any class spans): past it a measurement says nothing more along that axis, and
+/// the tilted likelihood's tails (`Phi` at `-beta sigma`) would leave f32.
+pub const MAX_SIGMA: f32 = 4.0;
+
 /// A closed interval `[min, max]` with `min < max`, both finite and `> 0`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -102,6 +107,22 @@ impl NoiseXy {
         Self {
             sigma_x: clamp_sigma(M::sqrt(f2 / 64.0 + 0.5625 * t2)),
             sigma_y: clamp_sigma(M::sqrt((f2 + 4.0 * t2) / (JACOBIAN * JACOBIAN))),
+        }
+    }
+}
+
+impl NoiseXy {
+    /// The noise widened by a bias `b` of `ln F_max` that comes with `-b` of `ln t_c` (a
+    /// pulse's area kept, as a chain's tolerance leaves it: [`crate::chain_bias`]): it moves
+    /// `(ln R, ln u)` by `(-5/8 b, 15/8 b)`, added in quadrature to each.
+    pub fn with_chain_bias<M: Backend>(self, bias_ln_force: f32) -> Self {
+        if bias_ln_force <= 0.0 || !bias_ln_force.is_finite() {
+            return self;
+        }
+        let (bx, by) = (0.625 * bias_ln_force, 1.875 * bias_ln_force);
+        Self {
+            sigma_x: clamp_sigma(M::sqrt(self.sigma_x * self.sigma_x + bx * bx)),
+            sigma_y: clamp_sigma(M::sqrt(self.sigma_y * self.sigma_y + by * by)),
         }
     }
 }
@@ -257,10 +278,10 @@ impl Envelope {
         let (sx, sy) = (noise.sigma_x, noise.sigma_y);
         let (x0, x1) = self.ln_radius;
         let (y0, y1) = self.ln_speed;
-        let ix = math::normal_cdf((x - x0) / sx) - math::normal_cdf((x - x1) / sx);
+        let ix = math::normal_interval((x - x1) / sx, (x - x0) / sx);
         let b = self.speed_beta;
         let shift = b * sy * sy;
-        let iy = math::normal_cdf((y1 - y - shift) / sy) - math::normal_cdf((y0 - y - shift) / sy);
+        let iy = math::normal_interval((y0 - y - shift) / sy, (y1 - y - shift) / sy);
         if ix <= 0.0 || iy <= 0.0 {
             return f32::NEG_INFINITY;
         }
@@ -278,9 +299,13 @@ impl Envelope {
     }
 }
 
-/// `MIN_SIGMA` for NaN or tiny values.
+/// `MIN_SIGMA` for NaN or tiny values, at most [`MAX_SIGMA`].
 fn clamp_sigma(s: f32) -> f32 {
-    if s >= MIN_SIGMA { s } else { MIN_SIGMA }
+    if s >= MIN_SIGMA {
+        s.min(MAX_SIGMA)
+    } else {
+        MIN_SIGMA
+    }
 }
 
 /// Distance of `v` outside `[lo, hi]` (0 inside).

@@ -83,6 +83,54 @@ pub struct Accelerometer {
     pub damping_ratio: f32,
 }
 
+/// How well the chain's parameters are known: the largest relative error of every stage's
+/// frequency, damping ratio and (beam modes) gain. The classifier widens a pulse's noise by
+/// the bias this can leave ([`crate::chain_bias`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChainTolerance {
+    /// Relative error of every frequency, in `[0, 0.5)`.
+    pub frequency: f32,
+    /// Relative error of every damping ratio, in `[0, 0.5)`.
+    pub damping: f32,
+    /// Relative error of every beam mode's gain, in `[0, 0.5)`.
+    pub gain: f32,
+}
+
+impl ChainTolerance {
+    /// Known exactly: no widening.
+    pub const EXACT: ChainTolerance = ChainTolerance {
+        frequency: 0.0,
+        damping: 0.0,
+        gain: 0.0,
+    };
+
+    /// What a chain is taken to be known to unless stated: frequency 2 %, damping 30 %, gain
+    /// 20 % (the chain parameters a stream's ring-downs give, with a margin: see
+    /// `docs/chain.md`).
+    pub const IDENTIFIED: ChainTolerance = ChainTolerance {
+        frequency: 0.02,
+        damping: 0.3,
+        gain: 0.2,
+    };
+
+    fn check(&self) -> Result<(), Error> {
+        for (v, name) in [
+            (self.frequency, "chain tolerance of frequency"),
+            (self.damping, "chain tolerance of damping"),
+            (self.gain, "chain tolerance of gain"),
+        ] {
+            if !v.is_finite() {
+                return Err(Error::NonFinite(name));
+            }
+            if !(0.0..0.5).contains(&v) {
+                return Err(Error::OutOfRange(name));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The chain's linear dynamics between the rigid plate and the ADC; every stage optional.
 /// Built from [`ChainDynamics::RIGID`] with [`ChainDynamics::with_mode`] and
 /// [`ChainDynamics::with_accelerometer`]; `crate::SensorChain::with_dynamics` designs its
@@ -94,6 +142,7 @@ pub struct ChainDynamics {
     modes: [BeamMode; MAX_MODES],
     mode_count: u8,
     accelerometer: Option<Accelerometer>,
+    tolerance: ChainTolerance,
     /// The equaliser and the sample rate (Hz) it was designed at.
     design: Option<(f32, EqualiserDesign)>,
 }
@@ -108,6 +157,7 @@ impl ChainDynamics {
         }; MAX_MODES],
         mode_count: 0,
         accelerometer: None,
+        tolerance: ChainTolerance::IDENTIFIED,
         design: None,
     };
 
@@ -131,6 +181,19 @@ impl ChainDynamics {
         self.accelerometer = Some(accelerometer);
         self.design = None;
         self
+    }
+
+    /// States how well the parameters are known ([`ChainTolerance::IDENTIFIED`] unless set);
+    /// [`Error::OutOfRange`] or [`Error::NonFinite`] outside `[0, 0.5)`.
+    pub fn with_tolerance(mut self, tolerance: ChainTolerance) -> Result<Self, Error> {
+        tolerance.check()?;
+        self.tolerance = tolerance;
+        Ok(self)
+    }
+
+    /// How well the parameters are known.
+    pub fn tolerance(&self) -> ChainTolerance {
+        self.tolerance
     }
 
     /// The accelerometer resonance, if modelled.

@@ -10,6 +10,7 @@
     clippy::indexing_slicing
 )]
 
+pub mod chain_bias;
 pub mod classifier;
 pub mod counters;
 pub mod detector;
@@ -24,11 +25,14 @@ pub mod monitor;
 pub mod scene;
 pub mod thornton;
 
+pub use chain_bias::ChainBias;
 pub use classifier::{Measurement, RejectReason, Verdict};
 pub use counters::Counters;
 pub use detector::{Detection, Detector};
 pub use envelope::{Envelope, Range, Side};
-pub use equaliser::{Accelerometer, BeamMode, ChainDynamics, Equaliser, EqualiserDesign};
+pub use equaliser::{
+    Accelerometer, BeamMode, ChainDynamics, ChainTolerance, Equaliser, EqualiserDesign,
+};
 pub use error::Error;
 pub use flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 pub use material::Material;

@@ -3,6 +3,7 @@
 
 use heapless::{String, Vec};
 
+use crate::chain_bias::ChainBias;
 use crate::envelope::{Envelope, Range};
 use crate::equaliser::{ChainDynamics, EqualiserDesign};
 use crate::error::{Error, positive, representable};
@@ -317,6 +318,7 @@ pub struct Scene<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> 
     ln_priors: Vec<f32, N>,
     sensor: SensorChain,
     equaliser: EqualiserDesign,
+    chain_bias: ChainBias,
     settings: Settings,
     separability: Separability,
     shortest_duration_s: f32,
@@ -393,6 +395,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             ));
         }
         representable(longest * sensor.sample_rate_hz, "longest pulse in samples")?;
+        let chain_bias =
+            ChainBias::new::<M>(&sensor.dynamics, sensor.sample_rate_hz, shortest, longest);
         let mut scene = Self {
             plate,
             classes: stored,
@@ -400,6 +404,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             ln_priors,
             sensor,
             equaliser,
+            chain_bias,
             settings,
             separability: Separability {
                 overlap_share: 0.0,
@@ -441,6 +446,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// The equaliser that inverts the sensor chain (the identity for a rigid chain).
     pub fn equaliser(&self) -> &EqualiserDesign {
         &self.equaliser
+    }
+
+    /// The bound of the bias the chain's tolerance can leave in `ln F_max`, per pulse duration
+    /// ([`ChainBias::NONE`] for a rigid chain or one known exactly).
+    pub fn chain_bias(&self) -> &ChainBias {
+        &self.chain_bias
     }
 
     /// The settings.

@@ -1,6 +1,8 @@
 //! The Hertz closed forms against the paper's printed tables and an independent f64
 //! evaluation of the textbook formulas.
 
+mod common;
+
 use coalshock::hertz::{self, CONTACT_TIME_FACTOR};
 use coalshock::material::{Material, effective_modulus_pa};
 
@@ -65,13 +67,7 @@ fn tau() -> f64 {
             2.0 * s / (1.0 - (1.0 - s * s).powf(2.5)).sqrt()
         }
     };
-    let n = 20_000;
-    let h = 1.0 / n as f64;
-    let mut acc = f(0.0) + f(1.0);
-    for i in 1..n {
-        acc += if i % 2 == 1 { 4.0 } else { 2.0 } * f(i as f64 * h);
-    }
-    acc * h / 3.0
+    common::simpson(f, 20_000)
 }
 
 #[test]

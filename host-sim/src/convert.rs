@@ -5,8 +5,8 @@
 use coalshock::math::Backend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{
-    Accelerometer, BeamMode, ChainDynamics, ContactCalibration, Material, Measurement,
-    ParticleClass, Range, Scene, SensorChain, Settings, Speed,
+    Accelerometer, BeamMode, ChainDynamics, ChainTolerance, ContactCalibration, Material,
+    Measurement, ParticleClass, Range, Scene, SensorChain, Settings, Speed,
 };
 
 use crate::hertz64::Material64;
@@ -123,6 +123,15 @@ pub fn dynamics_to_kernel(s: &SensorSpec) -> Result<ChainDynamics, ConvertError>
             frequency_hz: a.frequency_hz as f32,
             damping_ratio: a.damping_ratio as f32,
         });
+    }
+    if let Some(t) = &s.chain_tolerance {
+        dynamics = dynamics
+            .with_tolerance(ChainTolerance {
+                frequency: t.frequency as f32,
+                damping: t.damping as f32,
+                gain: t.gain as f32,
+            })
+            .map_err(ConvertError::Kernel)?;
     }
     Ok(dynamics)
 }

@@ -16,7 +16,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 use coalshock::{
-    Accelerometer, BeamMode, ContactCalibration, Material, ParticleClass, Range, Settings, Speed,
+    Accelerometer, BeamMode, ChainTolerance, ContactCalibration, Material, ParticleClass, Range,
+    Settings, Speed,
 };
 
 use crate::convert::{
@@ -229,6 +230,9 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
         if dynamics.accelerometer().is_some() {
             uses.push("Accelerometer");
         }
+        if dynamics.tolerance() != ChainTolerance::IDENTIFIED {
+            uses.push("ChainTolerance");
+        }
     }
     uses.sort_unstable();
     // One import list, filled to rustfmt's 100 columns as it would.
@@ -311,6 +315,20 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
                  }})",
                 lit(frequency_hz),
                 lit(damping_ratio),
+            );
+        }
+        let t = dynamics.tolerance();
+        if t != ChainTolerance::IDENTIFIED {
+            let _ = write!(
+                out,
+                "\n        .with_tolerance(ChainTolerance {{\n            \
+                     frequency: {},\n            \
+                     damping: {},\n            \
+                     gain: {},\n        \
+                 }})?",
+                lit(t.frequency),
+                lit(t.damping),
+                lit(t.gain),
             );
         }
         out.push_str(";\n    let sensor = sensor.with_dynamics_in::<M>(dynamics)?;\n");

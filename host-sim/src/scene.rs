@@ -624,6 +624,21 @@ pub struct BeamMode {
     pub gain: f64,
 }
 
+/// How well the kernel knows the chain (`[sensor] chain_tolerance`): the largest relative error
+/// of every stage's frequency, damping ratio and beam mode gain, each in `[0, 0.5)`. The kernel
+/// widens a pulse's noise by the bias this can leave; unset: the kernel's
+/// `ChainTolerance::IDENTIFIED` (2 %, 30 %, 20 %).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChainToleranceSpec {
+    /// Relative error of every frequency.
+    pub frequency: f64,
+    /// Relative error of every damping ratio.
+    pub damping: f64,
+    /// Relative error of every beam mode's gain.
+    pub gain: f64,
+}
+
 /// The sensor chain (`[sensor]`): contact force -> beam -> accelerometer -> sampling -> noise
 /// -> offset and drift -> ADC (see [`crate::sensor`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -654,6 +669,9 @@ pub struct SensorSpec {
     /// Beam modes, if modelled.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub beam_modes: Vec<BeamMode>,
+    /// How well the kernel knows the accelerometer and the beam modes (unset: 2 %, 30 %, 20 %).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chain_tolerance: Option<ChainToleranceSpec>,
 }
 
 fn default_oversample() -> u32 {
@@ -680,6 +698,7 @@ impl SensorSpec {
             oversample: DEFAULT_OVERSAMPLE,
             accelerometer: None,
             beam_modes: Vec::new(),
+            chain_tolerance: None,
         }
     }
 
@@ -732,6 +751,20 @@ impl SensorSpec {
                 m.damping_ratio,
             )?;
             finite(&format!("sensor.beam_modes[{i}].gain"), m.gain)?;
+        }
+        if let Some(t) = &self.chain_tolerance {
+            for (name, v) in [
+                ("sensor.chain_tolerance.frequency", t.frequency),
+                ("sensor.chain_tolerance.damping", t.damping),
+                ("sensor.chain_tolerance.gain", t.gain),
+            ] {
+                if !(v.is_finite() && (0.0..0.5).contains(&v)) {
+                    return Err(SceneError::invalid(
+                        name,
+                        format!("must be a relative error in [0, 0.5) (got {v})"),
+                    ));
+                }
+            }
         }
         Ok(())
     }

@@ -2,9 +2,11 @@
 //! accelerometer (first-order-hold integration on a fine grid), sampled, then equalised by
 //! the kernel, must give back the force samples; and the ringing after it must vanish.
 
+mod common;
+
 use coalshock::{Equaliser, EqualiserDesign};
 use host_sim::convert::sensor_to_kernel;
-use host_sim::scene::{BeamMode, Resonance, SensorSpec};
+use host_sim::scene::SensorSpec;
 use host_sim::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
 
 /// Peak force of the test pulse in counts of the rigid plate (large, so that rounding to
@@ -64,20 +66,7 @@ fn run(spec: &SensorSpec, duration_s: f64, phase: f64) -> Outcome {
 }
 
 fn spec(fs: f64, modes: &[(f64, f64, f64)], acc: Option<(f64, f64)>) -> SensorSpec {
-    let mut s = SensorSpec::rigid(fs, 500.0, 100.0, 0.0, 16);
-    s.beam_modes = modes
-        .iter()
-        .map(|&(frequency_hz, damping_ratio, gain)| BeamMode {
-            frequency_hz,
-            damping_ratio,
-            gain,
-        })
-        .collect();
-    s.accelerometer = acc.map(|(frequency_hz, damping_ratio)| Resonance {
-        frequency_hz,
-        damping_ratio,
-    });
-    s
+    common::chain_spec(fs, modes, acc)
 }
 
 /// A tail beam of three modes (100 Hz - 5 kHz band) at 100 kS/s and at 26.7 kS/s, pulses of

@@ -1,4 +1,4 @@
-//! Shared by the test files: a seeded generator, the textbook impact in f64, and the exact
+//! Shared by the test files: a seeded generator, Simpson's rule, the textbook impact in f64, and the exact
 //! shape of an undamped Hertz impact, integrated here in
 //! f64 from the equation of motion (independent of the kernel and its constants).
 #![allow(dead_code)]
@@ -151,4 +151,14 @@ impl Pulse {
     pub fn end(&self) -> usize {
         (self.start + self.len).ceil() as usize
     }
+}
+
+/// `int_0^1 f` by composite Simpson with `n` (even) panels.
+pub fn simpson(f: impl Fn(f64) -> f64, n: usize) -> f64 {
+    let h = 1.0 / n as f64;
+    let mut acc = f(0.0) + f(1.0);
+    for i in 1..n {
+        acc += if i % 2 == 1 { 4.0 } else { 2.0 } * f(i as f64 * h);
+    }
+    acc * h / 3.0
 }

@@ -1,0 +1,142 @@
+//! The kernel's bound on what a chain known to a tolerance does to a pulse's peak
+//! (`coalshock::chain_bias`, a first-order spectral integral) against a second method: a Hertz
+//! pulse through host-sim's exact chain with the parameter moved, equalised by the kernel's
+//! equaliser designed for the unmoved chain, and its peak compared with the same pulse through
+//! the unmoved chain.
+
+mod common;
+
+use coalshock::math::Libm;
+use coalshock::{ChainBias, ChainTolerance, Equaliser, EqualiserDesign};
+use host_sim::convert::sensor_to_kernel;
+use host_sim::scene::SensorSpec;
+use host_sim::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
+
+const FS: f64 = 100_000.0;
+const PEAK_COUNTS: f64 = 20_000.0;
+
+/// Peak and area (counts, counts s) of the pulse of `duration_s` through the chain `truth`,
+/// equalised for the chain `believed`; the peak from a parabola through the top three samples.
+fn equalised_peak_and_area(
+    truth: &SensorSpec,
+    believed: &SensorSpec,
+    duration_s: f64,
+) -> (f64, f64) {
+    let sensor = Sensor::new(truth).unwrap();
+    let start_s = 0.002;
+    let pulse = ForcePulse {
+        start_s,
+        duration_s,
+        scale: 1.0,
+        shape: PulseShape::HertzSine {
+            peak_force_n: PEAK_COUNTS / sensor.counts_per_newton(),
+        },
+    };
+    let n = (0.006 * FS) as usize;
+    let analog = sensor.analog_counts(&ForceTrack::new(vec![pulse]), n, 0.0);
+    let raw: Vec<i32> = analog.iter().map(|v| v.round() as i32).collect();
+    let chain = sensor_to_kernel(believed).unwrap();
+    let design = EqualiserDesign::new::<Libm>(&chain.dynamics, FS as f32).unwrap();
+    let mut out = vec![0.0f32; n];
+    Equaliser::new(&design).process(&raw, &mut out);
+    let out: Vec<f64> = out.iter().map(|&v| v as f64).collect();
+    let (i, _) = out
+        .iter()
+        .enumerate()
+        .skip(1)
+        .take(n - 2)
+        .fold((1, f64::MIN), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
+    let (a, b, c) = (out[i - 1], out[i], out[i + 1]);
+    let peak = b + 0.125 * (a - c) * (a - c) / (2.0 * b - a - c);
+    // The pulse and its accelerometer ring-down, not the slow modes' ringing after it.
+    let lo = ((start_s - 2e-4) * FS) as usize;
+    let hi = ((start_s + duration_s + 2e-4) * FS) as usize;
+    (peak, out[lo..hi].iter().sum::<f64>() / FS)
+}
+
+fn spec(modes: &[(f64, f64, f64)], acc: Option<(f64, f64)>) -> SensorSpec {
+    common::chain_spec(FS, modes, acc)
+}
+
+/// The kernel's bound at one duration for `believed` known to `tolerance`.
+fn bound(believed: &SensorSpec, tolerance: ChainTolerance, duration_s: f64) -> f64 {
+    let dynamics = sensor_to_kernel(believed)
+        .unwrap()
+        .dynamics
+        .with_tolerance(tolerance)
+        .unwrap();
+    let t = duration_s as f32;
+    ChainBias::new::<Libm>(&dynamics, FS as f32, t, t).bias_ln_force(t.ln()) as f64
+}
+
+/// Largest `|d ln F_max|` over the two signs of one relative move, and the largest
+/// `|d ln area|` (the area does not move to first order).
+fn measured(
+    believed: &SensorSpec,
+    moved: impl Fn(f64) -> SensorSpec,
+    step: f64,
+    duration_s: f64,
+) -> (f64, f64) {
+    let (f0, a0) = equalised_peak_and_area(believed, believed, duration_s);
+    let mut worst = (0.0f64, 0.0f64);
+    for sign in [1.0, -1.0] {
+        let (f, a) = equalised_peak_and_area(&moved(sign * step), believed, duration_s);
+        worst = (
+            worst.0.max((f / f0).ln().abs()),
+            worst.1.max((a / a0).ln().abs()),
+        );
+    }
+    worst
+}
+
+#[test]
+fn accelerometer_damping_moves_the_peak_as_bounded() {
+    // A MEMS accelerometer (6.3 kHz, damping 0.7), its damping known to 30 %.
+    let believed = spec(&[], Some((6300.0, 0.7)));
+    let tol = ChainTolerance {
+        frequency: 0.0,
+        damping: 0.3,
+        gain: 0.0,
+    };
+    for duration_s in [1.5e-4, 2.5e-4, 5e-4] {
+        let moved = |r: f64| spec(&[], Some((6300.0, 0.7 * (1.0 + r))));
+        let (d_force, d_area) = measured(&believed, moved, 0.3, duration_s);
+        let b = bound(&believed, tol, duration_s);
+        println!("t_c {duration_s:.1e}: measured {d_force:.4}, bound {b:.4}, area {d_area:.1e}");
+        assert!((d_force / b - 1.0).abs() < 0.25, "{d_force} against {b}");
+        assert!(d_area < 0.1 * d_force, "the area moved by {d_area}");
+    }
+}
+
+#[test]
+fn beam_mode_gains_move_the_peak_as_bounded() {
+    // Three beam modes whose gains are known to 20 %: the bound sums the three.
+    let modes = [(180.0, 0.02, 0.1), (650.0, 0.01, 0.05), (2100.0, 0.02, 0.1)];
+    let believed = spec(&modes, None);
+    let tol = ChainTolerance {
+        frequency: 0.0,
+        damping: 0.0,
+        gain: 0.2,
+    };
+    for duration_s in [1.5e-4, 5e-4] {
+        let moved = |r: f64| {
+            let m: Vec<_> = modes
+                .iter()
+                .map(|&(f, z, g)| (f, z, g * (1.0 + r)))
+                .collect();
+            spec(&m, None)
+        };
+        let (d_force, _) = measured(&believed, moved, 0.2, duration_s);
+        let b = bound(&believed, tol, duration_s);
+        println!("t_c {duration_s:.1e}: measured {d_force:.4}, bound {b:.4}");
+        assert!((d_force / b - 1.0).abs() < 0.25, "{d_force} against {b}");
+    }
+}
+
+#[test]
+fn an_exact_or_rigid_chain_has_no_bias() {
+    let rigid = spec(&[], None);
+    assert_eq!(bound(&rigid, ChainTolerance::IDENTIFIED, 3e-4), 0.0);
+    let acc = spec(&[], Some((6300.0, 0.7)));
+    assert_eq!(bound(&acc, ChainTolerance::EXACT, 3e-4), 0.0);
+}
