@@ -76,6 +76,13 @@ pub const RING_TAU_S: f32 = 1e-3;
 /// See [`RING_TAU_S`]; the release level is held at `RING_SIGMAS / 2` times the same root.
 pub const RING_SIGMAS: f32 = 4.0;
 
+/// The shape fit's own error of `ln F_max` at `n` samples per pulse, `FIT_FORCE n^-2.5`: the
+/// worst over the sample's phase of noiseless Hertz pulses from 3 to 400 samples per pulse.
+pub const FIT_FORCE: f32 = 0.15;
+
+/// The shape fit's own error of `ln t_c`, `FIT_DURATION n^-2.5` (see [`FIT_FORCE`]).
+pub const FIT_DURATION: f32 = 0.65;
+
 /// Longest box filter over the top of a pulse (samples).
 pub const SMOOTH_MAX: usize = 16;
 
@@ -800,12 +807,13 @@ impl<M: Backend> Detector<M> {
             return reject(RejectReason::Spike);
         }
         let n = p.samples as f32;
-        // Sampling: the fit's own error falls as `duration^-2.5`, taken as 0.1 and 0.3 of it
-        // for the peak and the duration. The noiseless errors measured at 3 to 400 samples per
-        // pulse (tests/detector.rs, `shape_fit_errors_by_rate`) reach 0.14 and 0.60 of it: up
-        // to 2x above these terms (beside `model_sigma` this matters below ~10 samples).
+        // Sampling: the fit's own error falls as `duration^-2.5`; its worst over the sample's
+        // phase, measured at 3 to 400 samples per pulse (tests/detector.rs,
+        // `shape_fit_errors_by_rate`), is 0.15 and 0.65 of it for the peak and the duration,
+        // taken here as the standard deviations (beside `model_sigma` this matters below ~10
+        // samples per pulse).
         let sampling = 1.0 / (duration * duration * M::sqrt(duration));
-        let (fit_force, fit_duration) = (0.1 * sampling, 0.3 * sampling);
+        let (fit_force, fit_duration) = (FIT_FORCE * sampling, FIT_DURATION * sampling);
         // The peak is the mean of `smooth` samples: its noise is that much smaller.
         let noise_force = self.noise / (peak * M::sqrt(self.smooth.max(1) as f32));
         let sigma_area = self.noise * M::sqrt(n) / p.sum;

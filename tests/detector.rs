@@ -4,7 +4,9 @@
 
 mod common;
 
-use coalshock::detector::{C_AREA, C_ENERGY, Detection, Detector, shape_fit};
+use coalshock::detector::{
+    C_AREA, C_ENERGY, Detection, Detector, FIT_DURATION, FIT_FORCE, shape_fit,
+};
 use coalshock::math::DefaultBackend;
 use coalshock::{Material, ParticleClass, Range, Scene, SensorChain, Settings, Speed};
 
@@ -84,19 +86,14 @@ fn fit_errors(spp: f64) -> (f64, f64) {
 }
 
 /// The README's table of the fit's noiseless errors, against the sampling term of the
-/// detector's noise model (`src/detector.rs`): the fit's own error taken as `0.1 n^-2.5` for the
-/// peak and `0.3 n^-2.5` for the duration, `n` samples per pulse. Printed with the margin
-/// (bound over error; below 1 where the error exceeds the assumed term).
-///
-/// The assumed terms do not bound every measured error: the duration's reaches 0.60 n^-2.5
-/// (3 samples per pulse) and the peak's 0.14 n^-2.5, so the assertion holds the errors to what
-/// is measured, `0.15 n^-2.5` and `0.65 n^-2.5`, plus `4 f32::EPSILON` for the f32 rounding of
-/// the fit (from 100 samples per pulse the error is that rounding), and the detector's
-/// coefficients are printed beside them.
+/// detector's noise model (`src/detector.rs`): the fit's own error taken as
+/// `FIT_FORCE n^-2.5 = 0.15 n^-2.5` for the peak and `FIT_DURATION n^-2.5 = 0.65 n^-2.5` for
+/// the duration, `n` samples per pulse. Asserted: every measured error lies below those terms
+/// plus `4 f32::EPSILON` for the f32 rounding of the fit (from 100 samples per pulse the error
+/// is that rounding); printed with the margin (term over error).
 #[test]
 fn shape_fit_errors_by_rate() {
-    const ASSUMED: (f64, f64) = (0.1, 0.3);
-    const MEASURED: (f64, f64) = (0.15, 0.65);
+    const ASSUMED: (f64, f64) = (FIT_FORCE as f64, FIT_DURATION as f64);
     // The fit's arithmetic: f32 rounding with libm; with micromath the peak's error floors at
     // 1.82e-4 from 15 samples per pulse on (its `powf`, behind `F^(2/3)` and `z^(3/2)`).
     let rounding = if coalshock::math::BACKEND == "micromath" {
@@ -117,11 +114,11 @@ fn shape_fit_errors_by_rate() {
             ASSUMED.1 * term / ed,
         );
         assert!(
-            ep <= MEASURED.0 * term + rounding,
+            ep <= ASSUMED.0 * term + rounding,
             "{spp}: peak error {ep:.3e}"
         );
         assert!(
-            ed <= MEASURED.1 * term + rounding,
+            ed <= ASSUMED.1 * term + rounding,
             "{spp}: duration error {ed:.3e}"
         );
         if ep > rounding {
