@@ -2,7 +2,7 @@
 
 use crate::envelope::{Inverted, NoiseXy, Side};
 use crate::math::Backend;
-use crate::scene::Scene;
+use crate::scene::{SampledCalibration, Scene};
 
 /// A pulse the detector measured: peak contact force and contact duration, with their
 /// standard deviations in log units (from the noise and the sampling).
@@ -250,14 +250,26 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     }
 
     /// The undamped Hertz impact a measurement stands for: `F_max / force_ratio` and
-    /// `t_c / duration_ratio` of the scene's [`crate::ContactCalibration`]; the identity for an
-    /// undamped contact.
+    /// `t_c / duration_ratio` of the scene's [`crate::ContactCalibration`], each also divided by
+    /// the sampling correction at the pulse's samples per pulse (whose spread joins the
+    /// measurement's sigmas); the identity for an undamped contact.
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
+        if c.sampled == SampledCalibration::NONE {
+            return Measurement {
+                peak_force_n: m.peak_force_n / c.force_ratio,
+                duration_s: m.duration_s / c.duration_ratio,
+                ..*m
+            };
+        }
+        let ln_n = M::ln(m.duration_s * self.sensor().sample_rate_hz);
+        let (lf, lt, sf, st) = c.sampled.at(ln_n);
+        let quad = |a: f32, b: f32| M::sqrt(a * a + b * b);
         Measurement {
-            peak_force_n: m.peak_force_n / c.force_ratio,
-            duration_s: m.duration_s / c.duration_ratio,
-            ..*m
+            peak_force_n: m.peak_force_n / (c.force_ratio * M::exp(lf)),
+            duration_s: m.duration_s / (c.duration_ratio * M::exp(lt)),
+            sigma_ln_force: quad(m.sigma_ln_force, sf),
+            sigma_ln_duration: quad(m.sigma_ln_duration, st),
         }
     }
 }

@@ -37,4 +37,6 @@ pub use error::Error;
 pub use flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 pub use material::Material;
 pub use monitor::{Event, Monitor, Report};
-pub use scene::{ContactCalibration, ParticleClass, Scene, SensorChain, Settings, Speed};
+pub use scene::{
+    ContactCalibration, ParticleClass, SampledCalibration, Scene, SensorChain, Settings, Speed,
+};

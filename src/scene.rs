@@ -213,6 +213,91 @@ pub struct ContactCalibration {
     /// force as the weight (0 for the symmetric Hertz pulse; a damped pulse rises faster than it
     /// falls: 0.82 for Flores at restitution 0.5, 0.15-0.2 for Adams with `d = 0.01 mm`).
     pub skewness: f32,
+    /// What sampling adds to `force_ratio` and `duration_ratio` at few samples per pulse
+    /// ([`SampledCalibration::NONE`] for the Hertz pulse, whose fit error the detector
+    /// carries itself).
+    pub sampled: SampledCalibration,
+}
+
+/// Samples per pulse of the first point of a [`SampledCalibration`].
+pub const SAMPLED_FIRST_N: f32 = 2.5;
+
+/// Ratio between consecutive points of a [`SampledCalibration`]: `n_k = 2.5 * 1.6^k`, `k = 0..8`
+/// (2.5 to 67 samples per pulse).
+pub const SAMPLED_STEP: f32 = 1.6;
+
+/// Points of a [`SampledCalibration`].
+pub const SAMPLED_POINTS: usize = 8;
+
+/// A skewed (damped) pulse of few samples is fitted with the symmetric Hertz shape: the peak
+/// and the duration the detector reports then move with the number of samples per pulse `n`
+/// and with the sample's phase. Per point `n_k` ([`SAMPLED_FIRST_N`], [`SAMPLED_STEP`]): the
+/// mean `ln` of the measured over the continuous ratio, and its spread over phases and impacts
+/// (log units), which the classifier adds to the measurement's noise. Linear in `ln n` between
+/// the points and held beyond them. Host-sim measures it with the kernel's own fit on its
+/// integrator's pulses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SampledCalibration {
+    /// Mean `ln(F_sampled / F_continuous)` at each point.
+    pub ln_force: [f32; SAMPLED_POINTS],
+    /// Mean `ln(t_sampled / t_continuous)` at each point.
+    pub ln_duration: [f32; SAMPLED_POINTS],
+    /// Spread (standard deviation) of `ln F_sampled` at each point.
+    pub sigma_ln_force: [f32; SAMPLED_POINTS],
+    /// Spread (standard deviation) of `ln t_sampled` at each point.
+    pub sigma_ln_duration: [f32; SAMPLED_POINTS],
+}
+
+impl SampledCalibration {
+    /// No sampling correction.
+    pub const NONE: SampledCalibration = SampledCalibration {
+        ln_force: [0.0; SAMPLED_POINTS],
+        ln_duration: [0.0; SAMPLED_POINTS],
+        sigma_ln_force: [0.0; SAMPLED_POINTS],
+        sigma_ln_duration: [0.0; SAMPLED_POINTS],
+    };
+
+    /// `(ln force, ln duration, sigma ln force, sigma ln duration)` at `ln n` (`n` samples per
+    /// pulse), linear between the points and held beyond them.
+    pub fn at(&self, ln_samples: f32) -> (f32, f32, f32, f32) {
+        const LN_FIRST: f32 = 0.916_290_7; // ln 2.5
+        const LN_STEP: f32 = 0.470_003_6; // ln 1.6
+        let at = (ln_samples - LN_FIRST) / LN_STEP;
+        let at = if at.is_finite() {
+            at.clamp(0.0, (SAMPLED_POINTS - 1) as f32)
+        } else {
+            0.0
+        };
+        let i = (at as usize).min(SAMPLED_POINTS - 2);
+        let f = at - i as f32;
+        let lerp = |t: &[f32; SAMPLED_POINTS]| {
+            let (a, b) = (
+                t.get(i).copied().unwrap_or(0.0),
+                t.get(i + 1).copied().unwrap_or(0.0),
+            );
+            a + (b - a) * f
+        };
+        (
+            lerp(&self.ln_force),
+            lerp(&self.ln_duration),
+            lerp(&self.sigma_ln_force),
+            lerp(&self.sigma_ln_duration),
+        )
+    }
+
+    fn check(&self) -> Result<(), Error> {
+        let all = |t: &[f32; SAMPLED_POINTS], lo: f32| {
+            t.iter().all(|v| v.is_finite() && (lo..=2.0).contains(v))
+        };
+        if !(all(&self.ln_force, -2.0) && all(&self.ln_duration, -2.0)) {
+            return Err(Error::OutOfRange("contact.sampled ln ratios (|ln| <= 2)"));
+        }
+        if !(all(&self.sigma_ln_force, 0.0) && all(&self.sigma_ln_duration, 0.0)) {
+            return Err(Error::OutOfRange("contact.sampled sigmas (0..=2)"));
+        }
+        Ok(())
+    }
 }
 
 impl ContactCalibration {
@@ -222,6 +307,7 @@ impl ContactCalibration {
         duration_ratio: 1.0,
         shape_ratio: 1.0,
         skewness: 0.0,
+        sampled: SampledCalibration::NONE,
     };
 
     fn check(&self) -> Result<(), Error> {
@@ -238,7 +324,7 @@ impl ContactCalibration {
         if !(self.skewness.is_finite() && self.skewness.abs() <= 10.0) {
             return Err(Error::OutOfRange("contact.skewness"));
         }
-        Ok(())
+        self.sampled.check()
     }
 }
 

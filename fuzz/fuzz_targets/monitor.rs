@@ -181,6 +181,12 @@ impl Bytes<'_> {
                 duration_ratio: self.f32_in(0.5, 2.0),
                 shape_ratio: self.f32_in(0.5, 2.0),
                 skewness: self.f32_in(0.01, 1.0),
+                sampled: coalshock::SampledCalibration {
+                    ln_force: [self.f32_in(-0.3, 0.1); coalshock::scene::SAMPLED_POINTS],
+                    ln_duration: [self.f32_in(-0.3, 0.3); coalshock::scene::SAMPLED_POINTS],
+                    sigma_ln_force: [self.f32_in(0.0, 0.2); coalshock::scene::SAMPLED_POINTS],
+                    sigma_ln_duration: [self.f32_in(0.0, 0.5); coalshock::scene::SAMPLED_POINTS],
+                },
             },
             skew_tolerance: self.f32_in(0.01, 1.0),
             spike_fraction: self.f32_in(0.05, 3.0),

@@ -12,6 +12,10 @@
 //! for Adams (a fixed `c_max` and penetration depth) they vary with size and speed, which the
 //! reported spread shows.
 
+use coalshock::detector::shape_fit;
+use coalshock::math::Libm;
+use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
+
 use crate::hertz64::HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR;
 use crate::impact::{ImpactSpec, simulate};
 use crate::integrate::SimError;
@@ -25,6 +29,99 @@ pub const C_AREA: f64 = 1.6 / CONTACT_TIME_FACTOR;
 pub const C_ENERGY: f64 = 2.0 * 0.893_515_349_287_690_3 * 1.772_453_850_905_516
     / 1.046_485_846_853_560_7
     / (2.5 * CONTACT_TIME_FACTOR);
+
+/// From this many samples in the scene's shortest pulse on, the kernel's detector fits a
+/// smoothed top instead of the Hertz shape through three samples (`detector::smooth_fit`).
+const SMOOTH_FROM_SAMPLES: f64 = 24.0;
+
+/// Sample phases per point of [`sampled_calibration`].
+const SAMPLED_PHASES: usize = 16;
+
+/// The sampling correction of a damped contact, per point `n_k = 2.5 * 1.6^k` samples per
+/// pulse (`coalshock::SampledCalibration`): mean and spread of `ln(measured / continuous)` of
+/// the peak force and the duration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sampled64 {
+    /// Mean `ln(F_fit / F_peak)`.
+    pub ln_force: [f64; SAMPLED_POINTS],
+    /// Mean `ln(t_fit / t_area)`.
+    pub ln_duration: [f64; SAMPLED_POINTS],
+    /// Standard deviation of `ln(F_fit / F_peak)` over phases and impacts.
+    pub sigma_ln_force: [f64; SAMPLED_POINTS],
+    /// Standard deviation of `ln(t_fit / t_area)` over phases and impacts.
+    pub sigma_ln_duration: [f64; SAMPLED_POINTS],
+}
+
+/// One calibration impact's continuous pulse: its force series `(t_s, force_n)`, its peak (N)
+/// and its duration from the area `area / (C_AREA F_peak)` (s).
+pub struct ContinuousPulse<'a> {
+    /// `(t_s, force_n)`, sorted by time.
+    pub series: &'a [(f64, f64)],
+    /// Largest force.
+    pub peak_n: f64,
+    /// `area / (C_AREA peak_n)`.
+    pub duration_s: f64,
+}
+
+/// What the kernel's Hertz-shape fit (`coalshock::detector::shape_fit`) reports for the pulses
+/// sampled at `n_k` samples of their own duration each, at [`SAMPLED_PHASES`] phases: the mean
+/// and the standard deviation of `ln(F_fit / F_peak)` and `ln(t_fit / t_area)` over phases and
+/// pulses. The fit assumes the symmetric Hertz shape; a damped pulse rises faster than it falls,
+/// and at a few samples per pulse the fit then reads it low and short by an amount that depends
+/// on `n` (the kernel divides it out per pulse).
+pub fn sampled_calibration(pulses: &[ContinuousPulse]) -> Sampled64 {
+    let mut out = Sampled64 {
+        ln_force: [0.0; SAMPLED_POINTS],
+        ln_duration: [0.0; SAMPLED_POINTS],
+        sigma_ln_force: [0.0; SAMPLED_POINTS],
+        sigma_ln_duration: [0.0; SAMPLED_POINTS],
+    };
+    for k in 0..SAMPLED_POINTS {
+        let n = SAMPLED_FIRST_N as f64 * (SAMPLED_STEP as f64).powi(k as i32);
+        let (mut f, mut t) = (Vec::new(), Vec::new());
+        for p in pulses {
+            let dt = p.duration_s / n;
+            for phase in 0..SAMPLED_PHASES {
+                if let Some((peak, samples)) = fit_sampled(p.series, dt, phase) {
+                    f.push((peak / p.peak_n).ln());
+                    t.push((samples * dt / p.duration_s).ln());
+                }
+            }
+        }
+        (out.ln_force[k], out.sigma_ln_force[k]) = mean_and_sigma(&f);
+        (out.ln_duration[k], out.sigma_ln_duration[k]) = mean_and_sigma(&t);
+    }
+    out
+}
+
+/// The kernel's fit of `series` sampled every `dt` from phase `phase / SAMPLED_PHASES`: peak
+/// (N) and duration (samples).
+fn fit_sampled(series: &[(f64, f64)], dt: f64, phase: usize) -> Option<(f64, f64)> {
+    let last = series.last()?.0;
+    let mut t = series.first()?.0 + dt * phase as f64 / SAMPLED_PHASES as f64;
+    let mut v = Vec::new();
+    while t < last {
+        v.push(force_at(series, t));
+        t += dt;
+    }
+    let (i, &top) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    let before = if i > 0 { v[i - 1] } else { 0.0 };
+    let after = v.get(i + 1).copied().unwrap_or(0.0);
+    let sum: f64 = v.iter().sum();
+    let (peak, samples) = shape_fit::<Libm>(top as f32, before as f32, after as f32, sum as f32)?;
+    Some((peak as f64, samples as f64))
+}
+
+/// Mean and standard deviation of `v` (0 and 0 when empty).
+fn mean_and_sigma(v: &[f64]) -> (f64, f64) {
+    if v.is_empty() {
+        return (0.0, 0.0);
+    }
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n;
+    (m, var.sqrt())
+}
 
 /// Points recorded per Hertz contact time when a pulse is integrated for calibration.
 const POINTS_PER_PULSE: f64 = 4000.0;
@@ -53,6 +150,10 @@ pub struct Calibration64 {
     /// Largest deviation of the shape ratio's log when the impacts' pulses are sampled at the
     /// scene's rate ([`sampled_shape_spread`]).
     pub sampled_shape_spread: f64,
+    /// What sampling at few samples per pulse adds ([`sampled_calibration`]); `None` when the
+    /// scene's shortest pulse has 24 samples or more (the detector then fits a smoothed top,
+    /// whose error does not depend on the pulse's skew).
+    pub sampled: Option<Sampled64>,
     /// Mean skewness of the impacts' whole pulses (above 0.5 % of the peak; 0 for Hertz).
     pub skewness: f64,
     /// Largest distance of one impact's skewness from the mean.
@@ -208,6 +309,8 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     let mut skews = Vec::new();
     let mut bend = 0.0f64;
     let mut sampled = 0.0f64;
+    let mut pulses = Vec::new();
+    let mut shortest_s = f64::INFINITY;
     for (i, class) in scene.classes.iter().enumerate() {
         let (r, u) = (class.radius_m, class.speed_range_m_s());
         for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
@@ -215,13 +318,33 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
                 let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
                 spec.law = scene.class_law(i)?;
                 let (ratios, series) = pulse_ratios_and_series(&spec)?;
+                let hertz = spec.hertz()?;
+                shortest_s = shortest_s.min(hertz.duration_s);
+                pulses.push((
+                    ratios.force * hertz.peak_force_n,
+                    ratios.duration * hertz.duration_s,
+                ));
                 bend = bend.max(sharpest_bend(&series, scene.sensor.sample_rate_hz));
                 skews.push(skewness(&series, 0.005));
                 sampled = sampled.max(sampled_shape_spread(&series, scene.sensor.sample_rate_hz));
-                all.push(ratios);
+                all.push((ratios, series));
             }
         }
     }
+    let fs = scene.sensor.sample_rate_hz;
+    let sampled_fit = (shortest_s * fs < SMOOTH_FROM_SAMPLES).then(|| {
+        let continuous: Vec<ContinuousPulse> = all
+            .iter()
+            .zip(&pulses)
+            .map(|((_, series), &(peak_n, duration_s))| ContinuousPulse {
+                series,
+                peak_n,
+                duration_s,
+            })
+            .collect();
+        sampled_calibration(&continuous)
+    });
+    let all: Vec<PulseRatios> = all.into_iter().map(|(r, _)| r).collect();
     let n = all.len() as f64;
     let mean = |f: fn(&PulseRatios) -> f64| all.iter().map(|p| f(p).ln()).sum::<f64>() / n;
     let (lf, ld, ls) = (mean(|p| p.force), mean(|p| p.duration), mean(|p| p.shape));
@@ -249,5 +372,6 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         },
         sharpest_bend: bend,
         sampled_shape_spread: sampled,
+        sampled: sampled_fit,
     }))
 }

@@ -3,10 +3,12 @@
 //! (a value beyond the f32 range becomes infinite and the kernel refuses it by name).
 
 use coalshock::math::Backend;
-use coalshock::scene::DEFAULT_CLASSES;
+use coalshock::scene::{DEFAULT_CLASSES, SAMPLED_POINTS};
+
+use crate::calibrate::Sampled64;
 use coalshock::{
     Accelerometer, BeamMode, ChainDynamics, ChainTolerance, ContactCalibration, Material,
-    Measurement, ParticleClass, Range, Scene, SensorChain, Settings, Speed,
+    Measurement, ParticleClass, Range, SampledCalibration, Scene, SensorChain, Settings, Speed,
 };
 
 use crate::hertz64::Material64;
@@ -158,6 +160,7 @@ pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
         duration_ratio: ratio(o.duration_ratio),
         shape_ratio: ratio(o.shape_ratio),
         skewness: o.skewness.unwrap_or(0.0) as f32,
+        sampled: SampledCalibration::NONE,
     };
     set(&mut s.skew_tolerance, o.skew_tolerance);
     if let Some(v) = o.hold_samples {
@@ -170,6 +173,17 @@ pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
         s.separability_grid = v;
     }
     s
+}
+
+/// The sampling correction in the kernel's f32.
+pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
+    let f = |v: &[f64; SAMPLED_POINTS]| v.map(|x| x as f32);
+    SampledCalibration {
+        ln_force: f(&t.ln_force),
+        ln_duration: f(&t.ln_duration),
+        sigma_ln_force: f(&t.sigma_ln_force),
+        sigma_ln_duration: f(&t.sigma_ln_duration),
+    }
 }
 
 /// A scene file -> the kernel scene with the default capacity and backend, via `Scene::new`.
@@ -214,6 +228,9 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
         duration_ratio: pick(o.duration_ratio, cal.map(|c| c.ratios.duration)),
         shape_ratio: pick(o.shape_ratio, cal.map(|c| c.ratios.shape)),
         skewness: o.skewness.or(cal.map(|c| c.skewness)).unwrap_or(0.0) as f32,
+        sampled: cal
+            .and_then(|c| c.sampled)
+            .map_or(SampledCalibration::NONE, |t| sampled_to_kernel(&t)),
     };
     if let Some(c) = cal {
         if o.shape_tolerance.is_none() {

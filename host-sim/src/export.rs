@@ -17,7 +17,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use coalshock::{
     Accelerometer, BeamMode, ChainTolerance, ContactCalibration, Material, ParticleClass, Range,
-    Settings, Speed,
+    SampledCalibration, Settings, Speed,
 };
 
 use crate::convert::{
@@ -114,6 +114,38 @@ fn contact_is_default(c: &ContactCalibration) -> bool {
     ]
     .iter()
     .all(|(a, b)| a.to_bits() == b.to_bits())
+        && c.sampled == SampledCalibration::NONE
+}
+
+/// `[a, b, ..]` of f32 literals that read back bit for bit.
+fn lit_array(v: &[f32]) -> String {
+    let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
+    format!("[{}]", items.join(", "))
+}
+
+/// The sampling correction as a `SampledCalibration` literal, or its `NONE`.
+fn sampled_literal(s: &SampledCalibration) -> String {
+    if *s == SampledCalibration::NONE {
+        return "SampledCalibration::NONE".into();
+    }
+    let SampledCalibration {
+        ln_force,
+        ln_duration,
+        sigma_ln_force,
+        sigma_ln_duration,
+    } = s;
+    format!(
+        "SampledCalibration {{\n                \
+             ln_force: {},\n                \
+             ln_duration: {},\n                \
+             sigma_ln_force: {},\n                \
+             sigma_ln_duration: {},\n            \
+         }}",
+        lit_array(ln_force),
+        lit_array(ln_duration),
+        lit_array(sigma_ln_force),
+        lit_array(sigma_ln_duration),
+    )
 }
 
 /// The settings as `Settings { .., ..Settings::default() }` with every field whose bits differ
@@ -164,6 +196,7 @@ fn settings(out: &mut String, s: &Settings) {
         duration_ratio,
         shape_ratio,
         skewness,
+        sampled,
     } = contact;
     if !contact_is_default(&contact) {
         fields.push(format!(
@@ -171,12 +204,14 @@ fn settings(out: &mut String, s: &Settings) {
                          force_ratio: {},\n            \
                          duration_ratio: {},\n            \
                          shape_ratio: {},\n            \
-                         skewness: {},\n        \
+                         skewness: {},\n            \
+                         sampled: {},\n        \
                      }},\n",
             lit(force_ratio),
             lit(duration_ratio),
             lit(shape_ratio),
             lit(skewness),
+            sampled_literal(&sampled),
         ));
     }
     if fields.is_empty() {
