@@ -15,8 +15,8 @@ pub struct CavingArgs {
     /// Scene file (TOML), optionally with a `[caving]` table giving the change.
     #[arg(long, default_value = "scenes/paper.toml")]
     pub scene: PathBuf,
-    /// Rounds simulated.
-    #[arg(long, default_value_t = 100)]
+    /// Rounds simulated (1 to 10^5).
+    #[arg(long, default_value_t = 100, value_parser = crate::counts::caving_rounds)]
     pub rounds: usize,
     /// Seed of every random draw.
     #[arg(long, default_value_t = 1)]
@@ -39,8 +39,8 @@ pub struct CavingArgs {
     /// Step or ramp (default step).
     #[arg(long, value_enum)]
     pub profile: Option<Profile>,
-    /// Impacts of a ramp (default 100).
-    #[arg(long)]
+    /// Impacts of a ramp (default 100; at most 10^6).
+    #[arg(long, value_parser = crate::counts::round_impacts)]
     pub ramp_impacts: Option<usize>,
     /// Mean impacts per s, Poisson (default 20).
     #[arg(long, allow_negative_numbers = true)]
@@ -48,17 +48,17 @@ pub struct CavingArgs {
     /// Memory of the share estimate in impacts.
     #[arg(long, default_value_t = 100)]
     pub window: u32,
-    /// Impacts before the change.
-    #[arg(long, default_value_t = 300)]
+    /// Impacts before the change (at most 10^6).
+    #[arg(long, default_value_t = 300, value_parser = crate::counts::round_impacts)]
     pub pre_impacts: usize,
-    /// Impacts from the change to the end of a round.
-    #[arg(long, default_value_t = 600)]
+    /// Impacts from the change to the end of a round (at most 10^6).
+    #[arg(long, default_value_t = 600, value_parser = crate::counts::round_impacts)]
     pub post_impacts: usize,
-    /// Pulses the naive rule looks back on.
-    #[arg(long, default_value_t = 20)]
+    /// Pulses the naive rule looks back on (at most 10^4).
+    #[arg(long, default_value_t = 20, value_parser = crate::counts::naive_pulses)]
     pub naive_n: usize,
-    /// Background impacts behind each measured false-alarm rate.
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Background impacts behind each measured false-alarm rate (at most 10^9).
+    #[arg(long, default_value_t = 1_000_000, value_parser = crate::counts::false_alarm_impacts)]
     pub false_alarm_impacts: usize,
     /// Name of the coal class (every other class is gangue).
     #[arg(long, default_value = "coal")]

@@ -400,8 +400,8 @@ pub struct EvaluateArgs {
     /// Scene file (TOML).
     #[arg(long)]
     pub scene: PathBuf,
-    /// Impacts per class.
-    #[arg(long)]
+    /// Impacts per class (1 to 10^7).
+    #[arg(long, value_parser = crate::counts::impacts_per_class)]
     pub n: usize,
     /// Seed of every random draw.
     #[arg(long, default_value_t = 1)]
@@ -412,8 +412,9 @@ pub struct EvaluateArgs {
     /// The kernel's math backend.
     #[arg(long, value_enum, default_value_t = BackendChoice::Default)]
     pub backend: BackendChoice,
-    /// Monte Carlo draws per class of the Bayes limit.
-    #[arg(long, default_value_t = DEFAULT_BAYES_DRAWS_PER_CLASS)]
+    /// Monte Carlo draws per class of the Bayes limit (1 to 10^8).
+    #[arg(long, default_value_t = DEFAULT_BAYES_DRAWS_PER_CLASS,
+          value_parser = crate::counts::bayes_draws_per_class)]
     pub bayes_draws: usize,
     /// Relative error of every chain frequency the kernel is given (0.02: 2 % high); the
     /// simulation keeps the scene's.

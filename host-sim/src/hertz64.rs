@@ -65,6 +65,12 @@ impl Material64 {
     /// `what` names the material in the error (for example `"sphere"`).
     pub fn validate(&self, what: &str) -> Result<(), SimError> {
         positive(&format!("{what}.density_kg_m3"), self.density_kg_m3)?;
+        self.validate_elastic(what)
+    }
+
+    /// Checks the elastic constants alone: modulus finite and positive, `-1 < nu <= 0.5`
+    /// (a plate's density does not enter the contact).
+    pub fn validate_elastic(&self, what: &str) -> Result<(), SimError> {
         positive(&format!("{what}.modulus_pa"), self.modulus_pa)?;
         if !(self.poisson > -1.0 && self.poisson <= 0.5) {
             return Err(SimError::InvalidParameter {
@@ -152,7 +158,8 @@ impl HertzImpact64 {
     /// Closed forms for a sphere of `sphere` material and radius `radius_m` (m) hitting a flat
     /// plate of `plate` material at `speed_m_s` (m/s).
     ///
-    /// Errors if a material, the radius or the speed is not finite and positive.
+    /// Errors if a material, the radius or the speed is not finite and positive (the plate's
+    /// density is not used: the plate is a half-space, so it may be NaN).
     pub fn new(
         sphere: &Material64,
         plate: &Material64,
@@ -160,7 +167,7 @@ impl HertzImpact64 {
         speed_m_s: f64,
     ) -> Result<Self, SimError> {
         sphere.validate("sphere")?;
-        plate.validate("plate")?;
+        plate.validate_elastic("plate")?;
         positive("radius_m", radius_m)?;
         let e_star = effective_modulus_pa(sphere, plate);
         let k = hertz_stiffness(e_star, radius_m);

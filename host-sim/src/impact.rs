@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::hertz64::{HertzImpact64, Material64, STANDARD_GRAVITY_M_S2};
+use crate::hertz64::{HertzImpact64, Material64};
 use crate::integrate::{ContactProblem, Limits, Method, SimError, Tolerance, integrate_contact};
 use crate::law_spec::LawSpec;
 
@@ -24,9 +24,11 @@ pub struct ImpactSpec {
     pub method: Method,
     /// Tolerance on the scaled state (used by [`Method::Dopri5`]).
     pub tolerance: Tolerance,
-    /// Whether gravity (9.80665 m/s^2, pushing into the plate) acts during the contact.
-    /// It changes `F_max` by up to about 2e-3 relative on the paper's grid.
-    pub gravity: bool,
+    /// Gravitational acceleration in m/s^2 pushing the sphere into the plate during the
+    /// contact (`>= 0`; 0: none, [`crate::hertz64::STANDARD_GRAVITY_M_S2`] = 9.80665 for standard
+    /// gravity).
+    /// Standard gravity changes `F_max` by up to about 2e-3 relative on the paper's grid.
+    pub gravity_m_s2: f64,
     /// Sample interval in s of the recorded force-time series, or `None` for no series.
     pub record: Option<f64>,
     /// Guards against runaway integrations.
@@ -46,7 +48,7 @@ impl ImpactSpec {
             law: LawSpec::Hertz,
             method: Method::Dopri5,
             tolerance: Tolerance::default(),
-            gravity: false,
+            gravity_m_s2: 0.0,
             record: None,
             limits: Limits::default(),
         }
@@ -106,11 +108,7 @@ pub fn simulate(spec: &ImpactSpec) -> Result<ImpactReport, SimError> {
         law,
         mass_kg: hertz.mass_kg,
         speed_m_s: hertz.speed_m_s,
-        gravity_m_s2: if spec.gravity {
-            STANDARD_GRAVITY_M_S2
-        } else {
-            0.0
-        },
+        gravity_m_s2: spec.gravity_m_s2,
     };
     let sol = integrate_contact(&problem, spec.method, spec.tolerance, &spec.limits)?;
     let force_series = match spec.record {

@@ -136,8 +136,8 @@ struct StreamArgs {
     /// scene.
     #[arg(long)]
     scene: Option<PathBuf>,
-    /// Number of impacts.
-    #[arg(long)]
+    /// Number of impacts (1 to 10^7).
+    #[arg(long, value_parser = host_sim::counts::stream_impacts)]
     n: usize,
     /// Seed of every random draw (impacts, timing, noise, faults).
     #[arg(long, default_value_t = 1)]

@@ -109,6 +109,23 @@ impl SceneError {
         }
     }
 
+    /// The same error with the class named after its field (`classes[1].prior (class
+    /// "gangue")`).
+    fn of_class(self, class: &str) -> Self {
+        match self {
+            SceneError::Invalid {
+                path,
+                field,
+                problem,
+            } => SceneError::Invalid {
+                path,
+                field: format!("{field} (class {class:?})"),
+                problem,
+            },
+            other => other,
+        }
+    }
+
     fn in_file(self, file: &Path) -> Self {
         match self {
             SceneError::Invalid {
@@ -165,9 +182,22 @@ impl MaterialName {
         }
     }
 
-    /// The material by its scene-file name (exact, lower case), or `None`.
+    /// The material by name, or `None`: the names of [`MaterialName::name`], in any case,
+    /// with `-` for `_`, and the short forms `steel` (carbon steel) and `mudstone` (sandy
+    /// mudstone). Scene files and `host-sim impact` read materials through this one list.
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|m| m.name() == name)
+        let norm = name.trim().to_ascii_lowercase().replace('-', "_");
+        match norm.as_str() {
+            "steel" => Some(MaterialName::CarbonSteel),
+            "mudstone" => Some(MaterialName::SandyMudstone),
+            n => Self::ALL.into_iter().find(|m| m.name() == n),
+        }
+    }
+
+    /// Every name of [`MaterialName::ALL`], joined by `", "`.
+    pub fn names() -> String {
+        let names: Vec<&str> = Self::ALL.iter().map(|m| m.name()).collect();
+        names.join(", ")
     }
 
     /// Density (kg/m^3), Young's modulus (Pa) and Poisson's ratio of the material.
@@ -250,20 +280,20 @@ impl<'de> Deserialize<'de> for MaterialSpec {
         impl<'de> Visitor<'de> for V {
             type Value = MaterialSpec;
             fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str(
-                    "a material name (coal, sandstone, carbon_steel, roof_sandstone, \
-                     sandy_mudstone) or a table { density_kg_m3, modulus_pa, poisson }",
+                write!(
+                    f,
+                    "a material name ({}) or a table {{ density_kg_m3, modulus_pa, poisson }}",
+                    MaterialName::names()
                 )
             }
             fn visit_str<E: de::Error>(self, v: &str) -> Result<MaterialSpec, E> {
                 MaterialName::from_name(v)
                     .map(MaterialSpec::Named)
                     .ok_or_else(|| {
-                        let known: Vec<&str> = MaterialName::ALL.iter().map(|m| m.name()).collect();
                         E::custom(format!(
                             "unknown material {v:?}; known: {}, or give {{ density_kg_m3, \
                          modulus_pa, poisson }}",
-                            known.join(", ")
+                            MaterialName::names()
                         ))
                     })
             }
@@ -284,9 +314,10 @@ impl<'de> Deserialize<'de> for MaterialSpec {
 // Ranges and classes
 // ---------------------------------------------------------------------------------------------
 
-/// A closed interval `[min, max]`, written `[min, max]` in a file; unit given by the field name.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(from = "[f64; 2]", into = "[f64; 2]")]
+/// A closed interval `[min, max]`, written `[min, max]` in a file (exactly two numbers); unit
+/// given by the field name.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(into = "[f64; 2]")]
 pub struct Range64 {
     /// Lower end.
     pub min: f64,
@@ -310,6 +341,43 @@ impl Range64 {
             ));
         }
         Ok(())
+    }
+}
+
+impl Range64 {
+    /// The range written as `values` in a file: exactly two numbers (integers are taken as
+    /// numbers), else a message saying what was found.
+    pub fn from_values(values: &[toml::Value]) -> Result<Self, String> {
+        let shown = || {
+            let cells: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+            format!("[{}]", cells.join(", "))
+        };
+        let number = |v: &toml::Value| match v {
+            toml::Value::Float(x) => Some(*x),
+            toml::Value::Integer(i) => Some(*i as f64),
+            _ => None,
+        };
+        if values.len() != 2 {
+            return Err(format!(
+                "must be exactly two numbers [min, max] (got {} values: {})",
+                values.len(),
+                shown()
+            ));
+        }
+        match (number(&values[0]), number(&values[1])) {
+            (Some(min), Some(max)) => Ok(Self::new(min, max)),
+            _ => Err(format!(
+                "must be exactly two numbers [min, max] (got {})",
+                shown()
+            )),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Range64 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let values = Vec::<toml::Value>::deserialize(d)?;
+        Range64::from_values(&values).map_err(de::Error::custom)
     }
 }
 
@@ -361,11 +429,11 @@ pub struct ClassSpec {
 struct ClassRaw {
     name: String,
     material: MaterialSpec,
-    radius_m: Range64,
+    radius_m: Vec<toml::Value>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    speed_m_s: Option<Range64>,
+    speed_m_s: Option<Vec<toml::Value>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    drop_height_m: Option<Range64>,
+    drop_height_m: Option<Vec<toml::Value>>,
     #[serde(default = "one")]
     prior: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -379,9 +447,13 @@ fn one() -> f64 {
 impl TryFrom<ClassRaw> for ClassSpec {
     type Error = String;
     fn try_from(r: ClassRaw) -> Result<Self, String> {
-        let speed = match (r.speed_m_s, r.drop_height_m) {
-            (Some(s), None) => SpeedSpec::Uniform(s),
-            (None, Some(h)) => SpeedSpec::DropHeight(h),
+        let range = |field: &str, values: &[toml::Value]| {
+            Range64::from_values(values).map_err(|e| format!("class {:?}: {field} {e}", r.name))
+        };
+        let radius_m = range("radius_m", &r.radius_m)?;
+        let speed = match (&r.speed_m_s, &r.drop_height_m) {
+            (Some(s), None) => SpeedSpec::Uniform(range("speed_m_s", s)?),
+            (None, Some(h)) => SpeedSpec::DropHeight(range("drop_height_m", h)?),
             (Some(_), Some(_)) => {
                 return Err(format!(
                     "class {:?}: give either speed_m_s or drop_height_m, not both",
@@ -399,7 +471,7 @@ impl TryFrom<ClassRaw> for ClassSpec {
         Ok(ClassSpec {
             name: r.name,
             material: r.material,
-            radius_m: r.radius_m,
+            radius_m,
             speed,
             prior: r.prior,
             yield_pressure_pa: r.yield_pressure_pa,
@@ -413,12 +485,13 @@ impl From<ClassSpec> for ClassRaw {
             SpeedSpec::Uniform(s) => (Some(s), None),
             SpeedSpec::DropHeight(h) => (None, Some(h)),
         };
+        let values = |r: Range64| vec![toml::Value::Float(r.min), toml::Value::Float(r.max)];
         ClassRaw {
             name: c.name,
             material: c.material,
-            radius_m: c.radius_m,
-            speed_m_s,
-            drop_height_m,
+            radius_m: values(c.radius_m),
+            speed_m_s: speed_m_s.map(values),
+            drop_height_m: drop_height_m.map(values),
             prior: c.prior,
             yield_pressure_pa: c.yield_pressure_pa,
         }
@@ -939,7 +1012,8 @@ impl SceneFile {
             ));
         }
         for (i, c) in self.classes.iter().enumerate() {
-            c.validate(&format!("classes[{i}]"))?;
+            c.validate(&format!("classes[{i}]"))
+                .map_err(|e| e.of_class(&c.name))?;
             if self.classes[..i].iter().any(|o| o.name == c.name) {
                 return Err(SceneError::invalid(
                     format!("classes[{i}].name"),
@@ -1033,26 +1107,51 @@ pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
     Ok(scene)
 }
 
+/// `v` finite and `> 0`, and a normal `f32` (the kernel's type).
 fn positive(field: &str, v: f64) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
+    if !(v.is_finite() && v > 0.0) {
+        return Err(SceneError::invalid(
             field,
             format!("must be finite and > 0 (got {v})"),
-        ))
+        ));
     }
+    kernel_f32(field, v)
 }
 
+/// `v` finite and within the `f32` range (the kernel's type).
 fn finite(field: &str, v: f64) -> Result<(), SceneError> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
+    if !v.is_finite() {
+        return Err(SceneError::invalid(
             field,
             format!("must be finite (got {v})"),
-        ))
+        ));
     }
+    kernel_f32(field, v)
+}
+
+/// `v` (finite) survives the kernel's `f32`: `|v| <= f32::MAX` (3.4e38), and `v` is 0 or
+/// `|v| >= f32::MIN_POSITIVE` (1.2e-38, the smallest normal number: below it the value
+/// loses precision, and below 1.4e-45 it becomes 0).
+fn kernel_f32(field: &str, v: f64) -> Result<(), SceneError> {
+    if v.abs() > f32::MAX as f64 {
+        return Err(SceneError::invalid(
+            field,
+            format!(
+                "= {v:e} overflows the kernel's f32 (largest {:e})",
+                f32::MAX
+            ),
+        ));
+    }
+    if v != 0.0 && v.abs() < f32::MIN_POSITIVE as f64 {
+        return Err(SceneError::invalid(
+            field,
+            format!(
+                "= {v:e} underflows the kernel's f32 (smallest normal {:e})",
+                f32::MIN_POSITIVE
+            ),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

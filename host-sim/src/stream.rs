@@ -1195,7 +1195,46 @@ fn csv_err(path: &Path, e: csv::Error) -> StreamError {
     }
 }
 
-/// Reads a stream written by [`write_stream`] (`out` as given to it).
+/// Checks the samples read from `bin` against the truth file: as many as its `stream` row's
+/// `position` (stored samples), which is the time line less the gaps' lost samples.
+fn check_length(
+    stream: &Stream,
+    stored: Option<u64>,
+    bin: &Path,
+    csv_path: &Path,
+) -> Result<(), StreamError> {
+    let stored = stored.unwrap_or(0);
+    let lost: u64 = stream.gaps.iter().map(|g| g.lost as u64).sum();
+    if stream.timeline_samples.checked_sub(lost) != Some(stored) {
+        return Err(StreamError::Format {
+            path: csv_path.to_path_buf(),
+            message: format!(
+                "the stream row's position ({stored} stored samples) is not its sample \
+                 ({} samples in the time line) less the gaps' {lost} lost samples",
+                stream.timeline_samples
+            ),
+        });
+    }
+    let read = stream.samples.len() as u64;
+    if read != stored {
+        return Err(StreamError::Format {
+            path: bin.to_path_buf(),
+            message: format!(
+                "holds {read} samples, but the truth file's stream row (position) says {stored}: \
+                 the samples are {}",
+                if read < stored {
+                    "truncated"
+                } else {
+                    "longer than the stream (doubled or appended?)"
+                }
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Reads a stream written by [`write_stream`] (`out` as given to it); the samples must be as
+/// many as the truth file says (see `FORMATS.md`).
 pub fn read_stream(out: &Path) -> Result<Stream, StreamError> {
     let (bin, csv_path) = stream_paths(out);
     let mut bytes = Vec::new();
@@ -1230,6 +1269,7 @@ pub fn read_stream(out: &Path) -> Result<Stream, StreamError> {
         gaps: Vec::new(),
         events: Vec::new(),
     };
+    let mut stored_samples = None;
     for (line, row) in rd.deserialize::<Row>().enumerate() {
         let row = row.map_err(|e| csv_err(&csv_path, e))?;
         let need = |name: &str, v: Option<f64>| {
@@ -1241,6 +1281,7 @@ pub fn read_stream(out: &Path) -> Result<Stream, StreamError> {
                 stream.sample_rate_hz = need("value", row.value)?;
                 stream.phase_s = need("time_s", row.time_s)?;
                 stream.timeline_samples = need_u("sample", row.sample)?;
+                stored_samples = Some(need_u("position", row.position)?);
             }
             "class" => {
                 let class = need_u("class", row.class.map(|c| c as u64))? as usize;
@@ -1289,6 +1330,7 @@ pub fn read_stream(out: &Path) -> Result<Stream, StreamError> {
     if !stream.sample_rate_hz.is_finite() {
         return Err(bad("no stream row".into()));
     }
+    check_length(&stream, stored_samples, &bin, &csv_path)?;
     // Truth rows are written by peak time; the stream keeps them by first contact.
     stream.truth.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
     stream.gaps.sort_by_key(|g| g.position);

@@ -64,7 +64,7 @@ fn batch_answers_good_and_bad_rows() {
     let (header, rows) = parse(&text);
 
     let mut expected: Vec<&str> = ECHO_COLUMNS.to_vec();
-    assert_eq!(expected[8], "target_restitution");
+    assert_eq!(expected[11], "target_restitution");
     expected.extend(RESULT_COLUMNS);
     expected.push("error");
     assert_eq!(header, expected);

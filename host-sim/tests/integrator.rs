@@ -599,7 +599,7 @@ fn guards_return_typed_errors() {
     bad(&|s| s.record = Some(0.0));
     // 1 mm/s onto the plate with gravity: g t_c is ten times u, the damped sphere settles.
     let mut s = ImpactSpec::new(Material64::COAL, Material64::CARBON_STEEL, 0.03, 1e-3);
-    s.gravity = true;
+    s.gravity_m_s2 = STANDARD_GRAVITY_M_S2;
     s.law = LawSpec::Flores { restitution: 0.5 };
     s.limits.max_time_tc = 50.0;
     assert!(matches!(simulate(&s), Err(SimError::NoSeparation { .. })));
@@ -619,7 +619,7 @@ fn gravity_changes_peak_force_by_under_two_per_mille() {
             for u in [1.0, 5.0] {
                 let mut spec = ImpactSpec::new(mat, Material64::CARBON_STEEL, r, u);
                 let without = simulate(&spec).expect("simulates");
-                spec.gravity = true;
+                spec.gravity_m_s2 = STANDARD_GRAVITY_M_S2;
                 let with = simulate(&spec).expect("simulates");
                 let d = with.peak_force_n / without.peak_force_n - 1.0;
                 assert!(d > 0.0, "gravity pushes into the plate");
