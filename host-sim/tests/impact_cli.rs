@@ -66,6 +66,7 @@ fn batch_answers_good_and_bad_rows() {
     let mut expected: Vec<&str> = ECHO_COLUMNS.to_vec();
     assert_eq!(expected[11], "target_restitution");
     expected.extend(RESULT_COLUMNS);
+    expected.push("warning");
     expected.push("error");
     assert_eq!(header, expected);
     assert_eq!(rows.len(), 2, "{text}");
@@ -188,4 +189,190 @@ fn single_impact_writes_row_and_series() {
     let (header, rows) = parse(&std::fs::read_to_string(dir.join("row.csv")).expect("row"));
     assert!(cell(&header, &rows[0], "error").contains("radius"));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `host-sim impact args`: (exit code, stdout, stderr).
+fn impact(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .arg("impact")
+        .args(args)
+        .output()
+        .expect("runs host-sim");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The one answer row of a single impact as (header, row).
+fn single(args: &[&str]) -> (Vec<String>, Vec<String>, String) {
+    let (_, out, err) = impact(args);
+    let (header, mut rows) = parse(&out);
+    assert_eq!(rows.len(), 1, "{out}{err}");
+    (header, rows.remove(0), err)
+}
+
+#[test]
+fn plate_by_properties_and_closed_form_columns() {
+    let base = ["--material", "coal", "--radius", "0.03", "--speed", "2"];
+    let (h, named, _) = single(&base);
+    let mut props = base.to_vec();
+    props.extend(["--plate-modulus", "2.06e11", "--plate-poisson", "0.28"]);
+    let (h2, by_props, _) = single(&props);
+    assert_eq!(cell(&h2, &by_props, "plate"), "");
+    for c in RESULT_COLUMNS {
+        assert_eq!(cell(&h, &named, c), cell(&h2, &by_props, c), "{c}");
+    }
+    // An aluminium plate (70 GPa, 0.33, no density): the closed forms written out here.
+    let mut alu = base.to_vec();
+    alu.extend(["--plate-modulus", "70e9", "--plate-poisson", "0.33"]);
+    let (h, row, _) = single(&alu);
+    assert_eq!(cell(&h, &row, "error"), "");
+    let e_star = 1.0 / ((1.0 - 0.32f64.powi(2)) / 5.3e9 + (1.0 - 0.33f64.powi(2)) / 70e9);
+    let k = 4.0 / 3.0 * e_star * 0.03f64.sqrt();
+    let m = 4.0 / 3.0 * std::f64::consts::PI * 1380.0 * 0.03f64.powi(3);
+    let d = (5.0 * m * 4.0 / (4.0 * k)).powf(0.4);
+    let num = |c: &str| -> f64 { cell(&h, &row, c).parse().expect(c) };
+    assert!(rel(num("hertz_stiffness_n_m1_5"), k) < 1e-14);
+    assert!(rel(num("mass_kg"), m) < 1e-14);
+    assert!(rel(num("hertz_delta_max_m"), d) < 1e-14);
+    assert!(rel(num("hertz_peak_force_n"), k * d.powf(1.5)) < 1e-13);
+    // t_c = (4/5) B(2/5, 1/2) delta_max / u, B(2/5, 1/2) = 3.6790939804058809 (mpmath).
+    assert!(
+        rel(
+            num("hertz_duration_s"),
+            0.8 * 3.679_093_980_405_881 * d / 2.0
+        ) < 1e-13
+    );
+    // The integrator beside them agrees.
+    assert!(rel(num("peak_force_n"), num("hertz_peak_force_n")) < 1e-7);
+    // Without a name, both elastic constants are needed.
+    let mut half = base.to_vec();
+    half.extend(["--plate-modulus", "70e9"]);
+    let (rc, _, err) = impact(&half);
+    assert_eq!(rc, 1);
+    assert!(err.contains("plate_poisson"), "{err}");
+}
+
+#[test]
+fn gravity_is_an_acceleration_on_the_flag_and_in_the_batch() {
+    let base = ["--material", "coal", "--radius", "0.015", "--speed", "1"];
+    let (h, none, _) = single(&base);
+    let mut g = base.to_vec();
+    g.extend(["--gravity", "9.80665"]);
+    let (_, with, _) = single(&g);
+    let f = |r: &[String]| -> f64 { cell(&h, r, "peak_force_n").parse().expect("F") };
+    // m g against the Hertz force raises the peak by about (5/6) m g / F_max... a little.
+    let rise = f(&with) / f(&none) - 1.0;
+    assert!(rise > 1e-5 && rise < 2e-3, "{rise}");
+    assert_eq!(cell(&h, &with, "gravity"), "9.80665");
+    // The batch column takes the same value and gives the same row.
+    let mut out = Vec::new();
+    let csv = "material,radius,speed,gravity\ncoal,0.015,1,9.80665\ncoal,0.015,1,true\n";
+    run_batch(&ImpactArgs::default(), csv.as_bytes(), &mut out).expect("batch");
+    let (hb, rows) = parse(std::str::from_utf8(&out).expect("utf8"));
+    assert_eq!(
+        cell(&hb, &rows[0], "peak_force_n"),
+        cell(&h, &with, "peak_force_n")
+    );
+    let batch_err = cell(&hb, &rows[1], "error");
+    let (rc, _, flag_err) = impact(&[&base[..], &["--gravity", "true"]].concat());
+    assert_eq!(rc, 2);
+    for e in [batch_err, flag_err.as_str()] {
+        assert!(e.contains("m/s^2") && e.contains("9.80665"), "{e}");
+    }
+}
+
+#[test]
+fn help_shows_readable_defaults_and_the_tolerance_scale() {
+    let (rc, out, _) = impact(&["--help"]);
+    assert_eq!(rc, 0);
+    assert!(out.contains("1e-5") && out.contains("1e-9"), "{out}");
+    assert!(
+        !out.contains("0.00001") && !out.contains("0.000000001"),
+        "{out}"
+    );
+    assert!(
+        out.contains("delta_max") && out.contains("approach speed u"),
+        "{out}"
+    );
+}
+
+#[test]
+fn errors_and_inapplicable_inputs_in_the_users_terms() {
+    let base = ["--material", "coal", "--speed", "1"];
+    for (extra, needles) in [
+        (
+            vec!["--law", "adams", "--c-max", "100", "--depth", "-1"],
+            vec!["depth = -1"],
+        ),
+        (
+            vec!["--radius", "1e-200"],
+            vec!["radius = 1e-200", "sphere mass"],
+        ),
+        (
+            vec!["--restitution", "0.5"],
+            vec!["restitution does not apply to law hertz"],
+        ),
+        (
+            vec!["--law", "flores", "--restitution", "0.5", "--c-max", "3"],
+            vec!["c_max does not apply to law flores"],
+        ),
+        (
+            vec!["--method", "rk4", "--tol", "1e-6"],
+            vec!["tol does not apply to method rk4"],
+        ),
+        (
+            vec!["--steps-per-tc", "50"],
+            vec!["steps_per_tc does not apply to method dopri5"],
+        ),
+        (
+            vec!["--law", "adams", "--restitution", "1"],
+            vec!["restitution = 1", "(0, 1)"],
+        ),
+    ] {
+        let mut args = base.to_vec();
+        if !extra.contains(&"--radius") {
+            args.extend(["--radius", "0.03"]);
+        }
+        args.extend(extra.iter().copied());
+        let (rc, out, err) = impact(&args);
+        assert_eq!(rc, 1, "{args:?}: {err}");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {n:?} not in {err}");
+        }
+        for internal in ["law.", "mass_kg", "_m =", "rtol"] {
+            assert!(!err.contains(internal), "{args:?}: {internal:?} in {err}");
+        }
+        assert!(out.lines().count() == 2, "{out}");
+    }
+}
+
+#[test]
+fn impacts_far_outside_hertz_theory_are_warned_about() {
+    // The paper's largest, fastest coal lump: inside both bounds.
+    let (h, row, err) = single(&["--material", "coal", "--radius", "0.04", "--speed", "5"]);
+    assert_eq!(cell(&h, &row, "warning"), "");
+    assert!(!err.contains("warning"), "{err}");
+    // u = 3e8 m/s: 705 m of penetration for a 3 cm sphere, at 1.5e5 times the wave speed.
+    let (h, row, err) = single(&["--material", "coal", "--radius", "0.03", "--speed", "3e8"]);
+    let w = cell(&h, &row, "warning");
+    assert!(
+        w.contains("penetration") && w.contains("bar-wave speed"),
+        "{w}"
+    );
+    assert!(err.contains("warning: penetration"), "{err}");
+    // Just past each bound: delta_max / R = 0.08 is at u = (0.08 R / delta_1)^(5/4) for the
+    // delta_1 of u = 1 m/s; the wave bound at u = 0.01 sqrt(E / rho).
+    let hz = HertzImpact64::new(&Material64::COAL, &Material64::CARBON_STEEL, 0.03, 1.0)
+        .expect("closed forms");
+    let u_pen = (0.08 * 0.03 / hz.delta_max_m).powf(1.25);
+    let u_wave = 0.01 * (5.3e9f64 / 1380.0).sqrt();
+    assert!(u_wave < u_pen, "the wave bound comes first for coal");
+    for (u, warned) in [(0.99 * u_wave, false), (1.01 * u_wave, true)] {
+        let s = format!("{u}");
+        let (h, row, _) = single(&["--material", "coal", "--radius", "0.03", "--speed", &s]);
+        assert_eq!(!cell(&h, &row, "warning").is_empty(), warned, "u = {u}");
+    }
 }
