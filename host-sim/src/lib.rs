@@ -23,6 +23,7 @@ pub mod laws;
 pub mod mismatch;
 pub mod paper;
 pub mod plasticity;
+pub mod saturation;
 pub mod scene;
 pub mod sensor;
 pub mod sim_error;

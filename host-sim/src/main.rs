@@ -217,8 +217,23 @@ fn resolve_scene(path: Option<&Path>) -> Result<(SceneFile, String)> {
     }
 }
 
+/// Reports on standard error the share of the scene's impacts predicted to clip the ADC
+/// (`host_sim::saturation`), as a warning above 1 %.
+fn report_saturation(scene: &SceneFile) {
+    match host_sim::saturation::predict(scene) {
+        Ok(p) => {
+            eprintln!("{}", p.summary());
+            if let Some(w) = p.warning() {
+                eprintln!("warning: {w}");
+            }
+        }
+        Err(e) => eprintln!("warning: the ADC clipping could not be predicted: {e}"),
+    }
+}
+
 fn run_stream(args: &StreamArgs) -> Result<()> {
     let (scene, from) = resolve_scene(args.scene.as_deref())?;
+    report_saturation(&scene);
     let options = args.options();
     let bar = ProgressBar::new(args.n as u64);
     if std::io::stderr().is_terminal() {
@@ -290,6 +305,7 @@ fn main() -> Result<()> {
 /// terminal's stderr.
 fn run_evaluate(args: &host_sim::evaluate::EvaluateArgs) -> Result<()> {
     let scene = scene::load(&args.scene)?;
+    report_saturation(&scene);
     let bar = ProgressBar::new(0);
     if std::io::stderr().is_terminal() {
         bar.set_draw_target(ProgressDrawTarget::stderr());

@@ -1,0 +1,189 @@
+//! The predicted share of impacts that clip the ADC (`host_sim::saturation`) against the
+//! share measured in generated streams: impacts with a raw code at an end of the ADC range,
+//! and (rigid chain) pulses the kernel rejects as `Saturated`. Also against a one-dimensional
+//! quadrature of the closed-form clipping radius, and zero on the paper's scene.
+//!
+//! Tolerance: three binomial standard errors of the measured share plus 0.5 pp for the
+//! prediction's grid and its neglect of noise.
+
+use coalshock::classifier::RejectReason;
+use coalshock::{Monitor, Verdict};
+use host_sim::convert::scene_to_kernel;
+use host_sim::hertz64::HertzImpact64;
+use host_sim::saturation::predict;
+use host_sim::scene::SceneFile;
+use host_sim::stream::{Stream, StreamOptions, generate, match_truth, replay};
+
+/// Roof sandstone against a hard coal up to R = 0.08 m, dropped 0.3-1.2 m, at the paper's
+/// gain (30 counts per m/s^2 on 50 kg, 16 bits: full scale 54.6 kN).
+const ROOF_TOML: &str = r#"
+name = "roof_saturating"
+plate = "carbon_steel"
+[[classes]]
+name = "hard_coal"
+material = { density_kg_m3 = 1385.0, modulus_pa = 13.8e9, poisson = 0.26 }
+radius_m = [0.015, 0.08]
+drop_height_m = [0.3, 1.2]
+[[classes]]
+name = "roof_sandstone"
+material = "roof_sandstone"
+radius_m = [0.015, 0.08]
+drop_height_m = [0.3, 1.2]
+[sensor]
+sample_rate_hz = 100000.0
+effective_mass_kg = 50.0
+counts_per_m_s2 = 30.0
+noise_rms_counts = 4.0
+adc_bits = 16
+"#;
+
+/// Share of `stream`'s impacts with a raw code at an end of the ADC range within their pulse
+/// (first contact to the end of the force, plus 2 samples).
+fn raw_clipped_share(scene: &SceneFile, stream: &Stream) -> f64 {
+    assert!(stream.gaps.is_empty());
+    let (lo, hi) = scene.sensor.adc_range();
+    let fs = stream.sample_rate_hz;
+    let at = |t_s: f64| ((t_s - stream.phase_s) * fs).max(0.0) as usize;
+    let clipped = stream
+        .truth
+        .iter()
+        .filter(|t| {
+            let end = (at(t.time_s + t.duration_s) + 3).min(stream.samples.len());
+            stream.samples[at(t.time_s)..end]
+                .iter()
+                .any(|&c| i32::from(c) >= hi || i32::from(c) <= lo)
+        })
+        .count();
+    clipped as f64 / stream.truth.len() as f64
+}
+
+fn assert_close(predicted: f64, measured: f64, n: usize, what: &str) {
+    let sigma = (predicted * (1.0 - predicted) / n as f64).sqrt();
+    let allowed = 3.0 * sigma + 0.005;
+    eprintln!("{what}: predicted {predicted:.4}, measured {measured:.4} over {n} impacts");
+    assert!(
+        (predicted - measured).abs() <= allowed,
+        "{what}: predicted {predicted:.4}, measured {measured:.4} (allowed {allowed:.4})"
+    );
+}
+
+#[test]
+fn predicted_clipping_matches_a_generated_stream_and_the_kernel() {
+    let scene = SceneFile::from_toml_str(ROOF_TOML).expect("scene");
+    let p = predict(&scene).expect("prediction");
+    assert!(p.share > 0.1, "this scene clips: {}", p.share);
+    assert!(p.warning().is_some());
+    let n = 3000;
+    let stream = generate(&scene, n, 12, &StreamOptions::default()).expect("stream");
+    let raw = raw_clipped_share(&scene, &stream);
+    assert_close(p.share, raw, n, "raw codes at full scale");
+
+    let mut monitor = Monitor::new(scene_to_kernel(&scene).expect("kernel scene"));
+    let reports = replay(&stream, &mut monitor);
+    // A clipped top puts the kernel's largest sample anywhere on the flat: pair within the
+    // longest pulse.
+    let longest = stream
+        .truth
+        .iter()
+        .map(|t| (t.duration_s * stream.sample_rate_hz).ceil() as u64)
+        .max()
+        .expect("impacts");
+    let m = match_truth(&reports, &stream.truth, longest);
+    assert_eq!(m.pairs.len(), n, "one report per impact");
+    let saturated = m
+        .pairs
+        .iter()
+        .filter(|pair| reports[pair.report].verdict == Verdict::Rejected(RejectReason::Saturated))
+        .count();
+    assert_close(
+        p.share,
+        saturated as f64 / n as f64,
+        n,
+        "kernel's Saturated",
+    );
+
+    // Per class, on the impacts of that class.
+    for (c, (name, share)) in p.per_class.iter().enumerate() {
+        let mine: Vec<_> = stream.truth.iter().filter(|t| t.class == c).collect();
+        let sub = Stream {
+            truth: mine.iter().map(|t| (*t).clone()).collect(),
+            ..stream.clone()
+        };
+        assert_close(*share, raw_clipped_share(&scene, &sub), mine.len(), name);
+    }
+}
+
+#[test]
+fn predicted_clipping_follows_a_resonant_chain() {
+    // The piezo chain (accelerometer at 35 kHz, three beam modes) behind a 12-bit ADC: full
+    // scale 3.4 kN on the rigid beam, the modes raising the peak.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/piezo_chain.toml");
+    let mut scene = host_sim::scene::load(path).expect("scene");
+    scene.sensor.adc_bits = 12;
+    let p = predict(&scene).expect("prediction");
+    assert!(p.peak_gain > 1.1, "{}", p.peak_gain);
+    assert!(p.share > 0.05 && p.share < 0.95, "{}", p.share);
+    let n = 2000;
+    let stream = generate(&scene, n, 5, &StreamOptions::default()).expect("stream");
+    assert_close(
+        p.share,
+        raw_clipped_share(&scene, &stream),
+        n,
+        "resonant chain",
+    );
+}
+
+#[test]
+fn a_single_class_matches_the_closed_form_clipping_radius() {
+    // One material, rigid chain, 10 MS/s (sampling changes nothing), uniform speed: F_max =
+    // c R^2 u^1.2, so the impact clips for R >= R*(u) = sqrt(T / (S/M c u^1.2)), and with R
+    // log-uniform on [R0, R1] the share is the mean over u of
+    // clamp(ln(R1 / R*(u)) / ln(R1 / R0), 0, 1).
+    let mut scene = SceneFile::from_toml_str(ROOF_TOML).expect("scene");
+    scene.classes[0] = scene.classes[1].clone();
+    scene.classes[0].name = "rock_a".into();
+    scene.classes[0].speed =
+        host_sim::scene::SpeedSpec::Uniform(host_sim::scene::Range64::new(1.0, 5.0));
+    scene.classes[1] = scene.classes[0].clone();
+    scene.classes[1].name = "rock_b".into();
+    scene.sensor.sample_rate_hz = 1e7;
+    let p = predict(&scene).expect("prediction");
+    let m = scene.classes[0].material.material();
+    let c = HertzImpact64::new(&m, &scene.plate.material(), 1.0, 1.0)
+        .expect("closed forms")
+        .peak_force_n;
+    let full_scale_counts = 32767.0 - 0.5;
+    let per_n = 30.0 / 50.0;
+    let (r0, r1) = (0.015f64, 0.08f64);
+    let steps = 100_000;
+    let mut sum = 0.0;
+    for k in 0..steps {
+        let u = 1.0 + 4.0 * (k as f64 + 0.5) / steps as f64;
+        let r_star = (full_scale_counts / (per_n * c * u.powf(1.2))).sqrt();
+        sum += ((r1 / r_star).ln() / (r1 / r0).ln()).clamp(0.0, 1.0);
+    }
+    let want = sum / steps as f64;
+    assert!(want > 0.05, "{want}");
+    eprintln!(
+        "closed form: predicted {:.5}, quadrature {want:.5}",
+        p.share
+    );
+    assert!((p.share - want).abs() < 2e-3, "{} against {want}", p.share);
+}
+
+#[test]
+fn the_paper_scene_does_not_clip() {
+    let scene = SceneFile::paper();
+    let p = predict(&scene).expect("prediction");
+    assert_eq!(p.share, 0.0);
+    assert!(p.warning().is_none());
+    // Its largest impact (sandstone, R 0.04 m, 5 m/s) against the full scale.
+    let hz = HertzImpact64::new(
+        &scene.classes[1].material.material(),
+        &scene.plate.material(),
+        0.04,
+        5.0,
+    )
+    .expect("closed forms");
+    assert!(hz.peak_force_n < p.full_scale_force_n);
+}
