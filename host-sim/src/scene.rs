@@ -9,7 +9,7 @@
 //! [[classes]]
 //! name = "coal"                       # at most 16 bytes (the kernel's NAME_LEN)
 //! material = "coal"
-//! radius_m = [0.015, 0.04]            # log-uniform prior on [min, max]
+//! radius_m = [0.015, 0.04]            # log-uniform prior on [min, max] (exactly two numbers)
 //! speed_m_s = [1.0, 5.0]              # uniform prior; or drop_height_m = [h0, h1] (uniform height)
 //! prior = 1.0                         # relative share of impacts (default 1)
 //! # yield_pressure_pa = 40e6           # optional: the material's limiting contact pressure
@@ -35,7 +35,8 @@
 //! ```
 //!
 //! [`load`] reads, parses and checks a file; every error names the file, and the field or the
-//! line and column that is wrong. [`SceneFile::paper`] and [`SceneFile::paper_narrow`] are the
+//! line and column that is wrong, and in a class the class's name. Values the kernel holds in
+//! `f32` must fit it: at most 3.4e38 in size, and a non-zero value at least 1.2e-38. [`SceneFile::paper`] and [`SceneFile::paper_narrow`] are the
 //! built-in scenes, equal to `scenes/paper.toml` and `scenes/paper_narrow.toml` and, once
 //! converted ([`crate::convert`]), to the kernel's `Scene::paper()` and `Scene::paper_narrow()`.
 
