@@ -159,7 +159,8 @@ impl Ends {
     /// it) and duration `t_s` has a sample at an end of the ADC.
     fn clip_probability(&self, peak: f64, dip: f64, t_s: f64) -> f64 {
         let one = |p: f64, limit: f64| {
-            if !(p >= limit) {
+            // A NaN peak (never from valid closed forms) counts as no clipping.
+            if p.is_nan() || p < limit {
                 return 0.0;
             }
             let tau = t_s / std::f64::consts::PI * (limit / p).powf(2.0 / 3.0).acos();
