@@ -45,29 +45,17 @@ pub const INPUT_COLUMNS: [&str; 18] = [
     "gravity",
 ];
 
+/// Index of `restitution` in [`INPUT_COLUMNS`].
+pub const RESTITUTION_COLUMN: usize = 11;
+
 /// Names of the echoed inputs in the answer: [`INPUT_COLUMNS`] with `restitution` written as
 /// `target_restitution`, since `restitution` is also a result column (the simulated one).
 /// A batch file may use either name.
-pub const ECHO_COLUMNS: [&str; 18] = [
-    "material",
-    "density",
-    "modulus",
-    "poisson",
-    "plate",
-    "plate_density",
-    "plate_modulus",
-    "plate_poisson",
-    "radius",
-    "speed",
-    "law",
-    "target_restitution",
-    "c_max",
-    "depth",
-    "method",
-    "tol",
-    "steps_per_tc",
-    "gravity",
-];
+pub const ECHO_COLUMNS: [&str; 18] = {
+    let mut names = INPUT_COLUMNS;
+    names[RESTITUTION_COLUMN] = "target_restitution";
+    names
+};
 
 /// Adams penetration `d` in m when `depth` is not given (Adams' own suggestion).
 pub const DEFAULT_DEPTH_M: f64 = 1e-5;
@@ -639,4 +627,17 @@ pub fn user_terms(e: SimError) -> String {
         _ => name.as_str(),
     };
     format!("{column} = {}: must be {requirement}", fmt_f64(*value))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn echo_columns_rename_restitution_alone() {
+        assert_eq!(INPUT_COLUMNS[RESTITUTION_COLUMN], "restitution");
+        for (i, (a, b)) in INPUT_COLUMNS.iter().zip(ECHO_COLUMNS).enumerate() {
+            assert_eq!(*a == b, i != RESTITUTION_COLUMN, "{a} {b}");
+        }
+    }
 }

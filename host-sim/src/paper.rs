@@ -100,7 +100,7 @@ pub struct PaperArgs {
     #[arg(long, default_value_t = 0.5)]
     pub restitution: f64,
     /// Adams IMPACT penetration `d` in m over which the damping ramps up to `c_max`.
-    #[arg(long, default_value_t = 1e-5)]
+    #[arg(long, default_value = "1e-5")]
     pub depth: f64,
 }
 

@@ -297,6 +297,9 @@ fn help_shows_readable_defaults_and_the_tolerance_scale() {
         out.contains("delta_max") && out.contains("approach speed u"),
         "{out}"
     );
+    for m in host_sim::scene::MaterialName::ALL {
+        assert!(out.contains(m.name()), "{} not in --help", m.name());
+    }
 }
 
 #[test]
