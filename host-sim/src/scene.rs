@@ -1014,6 +1014,9 @@ impl SceneFile {
         }
         for (i, c) in self.classes.iter().enumerate() {
             c.validate(&format!("classes[{i}]"))
+                .and_then(|()| {
+                    class_closed_forms_fit(c, &self.plate.material(), &format!("classes[{i}]"))
+                })
                 .map_err(|e| e.of_class(&c.name))?;
             if self.classes[..i].iter().any(|o| o.name == c.name) {
                 return Err(SceneError::invalid(
@@ -1130,27 +1133,76 @@ fn finite(field: &str, v: f64) -> Result<(), SceneError> {
     kernel_f32(field, v)
 }
 
-/// `v` (finite) survives the kernel's `f32`: `|v| <= f32::MAX` (3.4e38), and `v` is 0 or
-/// `|v| >= f32::MIN_POSITIVE` (1.2e-38, the smallest normal number: below it the value
-/// loses precision, and below 1.4e-45 it becomes 0).
+/// Smallest and largest magnitude the kernel carries in its `f32` closed forms, its own bounds
+/// (`coalshock::error::REPRESENTABLE`): every positive input and derived quantity outside them
+/// is refused there.
+pub const KERNEL_RANGE: (f64, f64) = (1e-30, 1e30);
+
+/// `v` (finite) survives the kernel's `f32` arithmetic: `|v| <= ` [`KERNEL_RANGE`]`.1`, and
+/// `v` is 0 or `|v| >= ` [`KERNEL_RANGE`]`.0`.
 fn kernel_f32(field: &str, v: f64) -> Result<(), SceneError> {
-    if v.abs() > f32::MAX as f64 {
+    let (lo, hi) = KERNEL_RANGE;
+    if v.abs() > hi {
         return Err(SceneError::invalid(
             field,
             format!(
-                "= {v:e} overflows the kernel's f32 (largest {:e})",
-                f32::MAX
+                "= {v:e} overflows the kernel's f32 arithmetic (it refuses values above {hi:e})"
             ),
         ));
     }
-    if v != 0.0 && v.abs() < f32::MIN_POSITIVE as f64 {
+    if v != 0.0 && v.abs() < lo {
         return Err(SceneError::invalid(
             field,
             format!(
-                "= {v:e} underflows the kernel's f32 (smallest normal {:e})",
-                f32::MIN_POSITIVE
+                "= {v:e} underflows the kernel's f32 arithmetic (it refuses values below {lo:e})"
             ),
         ));
+    }
+    Ok(())
+}
+
+/// The Hertz closed forms of class `c` on `plate` at the corners of its radius and speed
+/// ranges, each within [`KERNEL_RANGE`] (the kernel computes them in `f32`): sphere mass,
+/// stiffness, `5 pi rho / (4 E*)`, `delta_max`, `delta_max^1.5`, `F_max`, `t_c`, impulse.
+fn class_closed_forms_fit(
+    c: &ClassSpec,
+    plate: &Material64,
+    field: &str,
+) -> Result<(), SceneError> {
+    let m = c.material.material();
+    let u = c.speed_range_m_s();
+    let e_star = crate::hertz64::effective_modulus_pa(&m, plate);
+    for r in [c.radius_m.min, c.radius_m.max] {
+        for u in [u.min, u.max] {
+            let Ok(hz) = crate::hertz64::HertzImpact64::new(&m, plate, r, u) else {
+                continue;
+            };
+            let d = hz.delta_max_m;
+            for (what, v) in [
+                ("sphere mass (kg)", hz.mass_kg),
+                ("Hertz stiffness (N/m^1.5)", hz.stiffness),
+                (
+                    "5 pi rho / (4 E*) (s^2/m^2)",
+                    1.25 * std::f64::consts::PI * m.density_kg_m3 / e_star,
+                ),
+                ("delta_max (m)", d),
+                ("delta_max^1.5", d * d.sqrt()),
+                ("peak force (N)", hz.peak_force_n),
+                ("contact duration (s)", hz.duration_s),
+                ("impulse (N s)", hz.impulse_n_s),
+            ] {
+                if !(v.is_finite() && v >= KERNEL_RANGE.0 && v <= KERNEL_RANGE.1) {
+                    return Err(SceneError::invalid(
+                        format!("{field}.radius_m and speed"),
+                        format!(
+                            "give a {what} of {v:e} at R = {r:e} m, u = {u} m/s: outside \
+                             [{:e}, {:e}], the range the kernel's f32 closed forms carry",
+                            KERNEL_RANGE.0, KERNEL_RANGE.1
+                        ),
+                    ));
+                }
+            }
+        }
     }
     Ok(())
 }

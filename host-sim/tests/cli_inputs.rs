@@ -6,7 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use host_sim::scene::{MaterialName, SceneFile};
+use host_sim::convert::scene_to_kernel;
+use host_sim::hertz64::Material64;
+use host_sim::scene::{MaterialName, MaterialSpec, SceneFile};
 use host_sim::stream::{StreamOptions, generate, read_stream, stream_paths, write_stream};
 
 fn temp_dir(tag: &str) -> PathBuf {
@@ -158,12 +160,40 @@ fn values_beyond_the_kernels_f32_name_the_class_and_the_reason() {
         &[
             "classes[1].material.modulus_pa",
             "class \"gangue\"",
-            "overflows the kernel's f32",
+            "overflows the kernel's f32 arithmetic",
         ],
     );
-    // Just inside the range, the values pass the file's checks.
-    let small = paper_with("prior = 1.0", "prior = 1e-30");
-    SceneFile::from_toml_str(&small).expect("a normal f32 prior");
+    // The host's bound is the kernel's: just inside it both accept, just outside both refuse.
+    for (value, inside) in [(0.9e30, true), (1.1e30, false)] {
+        let mut s = SceneFile::paper();
+        s.classes[1].material = MaterialSpec::Custom(Material64 {
+            modulus_pa: value,
+            ..Material64::SANDSTONE
+        });
+        assert_eq!(s.validate().is_ok(), inside, "host, E = {value}");
+        assert_eq!(scene_to_kernel(&s).is_ok(), inside, "kernel, E = {value}");
+    }
+    for (value, inside) in [(1.1e-30, true), (0.9e-30, false)] {
+        let mut s = SceneFile::paper();
+        s.classes[0].prior = value;
+        assert_eq!(s.validate().is_ok(), inside, "host, prior = {value}");
+        assert_eq!(
+            scene_to_kernel(&s).is_ok(),
+            inside,
+            "kernel, prior = {value}"
+        );
+    }
+    // A derived quantity the kernel cannot carry names the class too.
+    let tiny = paper_with("radius_m = [0.015, 0.04]", "radius_m = [1e-30, 1e-29]");
+    scene_refused(
+        "tiny",
+        &tiny,
+        &[
+            "classes[0].radius_m and speed",
+            "class \"coal\"",
+            "sphere mass",
+        ],
+    );
 }
 
 #[test]
