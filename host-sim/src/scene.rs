@@ -36,7 +36,8 @@
 //!
 //! [`load`] reads, parses and checks a file; every error names the file, and the field or the
 //! line and column that is wrong, and in a class the class's name. Values the kernel holds in
-//! `f32` must fit it: at most 3.4e38 in size, and a non-zero value at least 1.2e-38. [`SceneFile::paper`] and [`SceneFile::paper_narrow`] are the
+//! `f32` must lie within its bounds ([`KERNEL_RANGE`]: a non-zero size from 1e-30 to 1e30),
+//! and so must each class's Hertz closed forms at the corners of its ranges. [`SceneFile::paper`] and [`SceneFile::paper_narrow`] are the
 //! built-in scenes, equal to `scenes/paper.toml` and `scenes/paper_narrow.toml` and, once
 //! converted ([`crate::convert`]), to the kernel's `Scene::paper()` and `Scene::paper_narrow()`.
 
