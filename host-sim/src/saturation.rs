@@ -6,7 +6,8 @@
 //! `u = sqrt(2 g h)`), so that every cell carries the same prior weight:
 //!
 //! 1. the peak force `F = r_F F_max` and duration `t = r_t t_c` of the pulse, with the Hertz
-//!    closed forms `F_max`, `t_c` and the contact law's ratios `r_F`, `r_t` (1 for Hertz;
+//!    closed forms `F_max`, `t_c` and the class's contact law's ratios `r_F`, `r_t` (the
+//!    scene's law, or Thornton's for a class that yields; 1 for Hertz;
 //!    otherwise the integrator's peak and pulse duration over Hertz's, on a [`LAW_GRID`]^2
 //!    grid of the class's corners and inner points, bilinear between them);
 //! 2. the chain's peak output `P = G+(t) S F / M` counts above the baseline, and its deepest
@@ -29,7 +30,8 @@
 use crate::hertz64::HertzImpact64;
 use crate::impact::{ImpactSpec, simulate};
 use crate::integrate::SimError;
-use crate::scene::{ClassSpec, ContactLaw, SceneError, SceneFile, SensorSpec, SpeedSpec};
+use crate::law_spec::LawSpec;
+use crate::scene::{ClassSpec, SceneError, SceneFile, SensorSpec, SpeedSpec};
 use crate::sensor::{ForcePulse, PulseShape, Sensor};
 
 /// Share of impacts above which loading a scene warns about clipping.
@@ -119,10 +121,8 @@ pub fn predict(scene: &SceneFile) -> Result<ClipPrediction, SaturationError> {
         dt_s: 1.0 / sensor.sample_rate_hz(),
         counts_per_n: sensor.counts_per_newton(),
     };
-    let laws = scene
-        .classes
-        .iter()
-        .map(|c| LawRatios::new(scene, c))
+    let laws = (0..scene.classes.len())
+        .map(|i| LawRatios::new(scene, i))
         .collect::<Result<Vec<_>, _>>()?;
     let (t_lo, t_hi) = duration_span(scene, &laws)?;
     let gain = ChainGain::new(&scene.sensor, t_lo, t_hi)?;
@@ -238,16 +238,18 @@ struct LawRatios {
 }
 
 impl LawRatios {
-    fn new(scene: &SceneFile, c: &ClassSpec) -> Result<Self, SaturationError> {
-        if scene.contact == ContactLaw::Hertz {
-            return Ok(Self { table: Vec::new() });
-        }
-        let (x0, x1) = (c.radius_m.min.ln(), c.radius_m.max.ln());
-        let (y0, y1) = prior_range(c);
+    fn new(scene: &SceneFile, class: usize) -> Result<Self, SaturationError> {
+        let c = &scene.classes[class];
         let err = |error| SaturationError::Impact {
             class: c.name.clone(),
             error,
         };
+        let law = scene.class_law(class).map_err(err)?;
+        if law == LawSpec::Hertz {
+            return Ok(Self { table: Vec::new() });
+        }
+        let (x0, x1) = (c.radius_m.min.ln(), c.radius_m.max.ln());
+        let (y0, y1) = prior_range(c);
         let mut table = Vec::with_capacity(LAW_GRID * LAW_GRID);
         for i in 0..LAW_GRID {
             let a = i as f64 / (LAW_GRID - 1) as f64;
@@ -256,7 +258,7 @@ impl LawRatios {
                 let r = (x0 + a * (x1 - x0)).exp();
                 let u = speed_at(c, y0 + b * (y1 - y0));
                 let mut spec = ImpactSpec::new(c.material.material(), scene.plate.material(), r, u);
-                spec.law = scene.contact.law_spec();
+                spec.law = law;
                 let hz = spec.hertz().map_err(err)?;
                 let rep = simulate(&spec).map_err(err)?;
                 table.push((

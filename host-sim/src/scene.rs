@@ -1030,6 +1030,7 @@ impl SceneFile {
         for i in 0..self.classes.len() {
             self.class_law(i).map_err(|e| {
                 SceneError::invalid(format!("classes[{i}].yield_pressure_pa"), e.to_string())
+                    .of_class(&self.classes[i].name)
             })?;
         }
         self.sensor.validate()?;

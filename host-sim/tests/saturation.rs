@@ -114,6 +114,28 @@ fn predicted_clipping_matches_a_generated_stream_and_the_kernel() {
 }
 
 #[test]
+fn predicted_clipping_follows_a_yielding_class() {
+    // The roof sandstone yields at 300 MPa (Thornton): its peak force is capped, and fewer of
+    // its impacts clip than elastic ones would.
+    let text = ROOF_TOML.replace(
+        "material = \"roof_sandstone\"",
+        "material = \"roof_sandstone\"\nyield_pressure_pa = 300e6",
+    );
+    let scene = SceneFile::from_toml_str(&text).expect("scene");
+    let elastic = predict(&SceneFile::from_toml_str(ROOF_TOML).expect("scene")).expect("elastic");
+    let p = predict(&scene).expect("prediction");
+    assert!(p.per_class[1].1 < elastic.per_class[1].1 - 0.05, "{p:?}");
+    let n = 1500;
+    let stream = generate(&scene, n, 7, &StreamOptions::default()).expect("stream");
+    assert_close(
+        p.share,
+        raw_clipped_share(&scene, &stream),
+        n,
+        "yielding roof sandstone",
+    );
+}
+
+#[test]
 fn predicted_clipping_follows_a_resonant_chain() {
     // The piezo chain (accelerometer at 35 kHz, three beam modes) behind a 12-bit ADC: full
     // scale 3.4 kN on the rigid beam, the modes raising the peak.
