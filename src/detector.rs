@@ -403,18 +403,35 @@ impl<M: Backend> Detector<M> {
     /// [`crate::Monitor::feed_slice`].
     #[inline]
     pub fn feed_quiet<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> usize {
-        self.feed_quiet_values(samples.iter().map(|&s| {
+        let mut pairs = samples.iter().map(|&s| {
             let x: i32 = s.into();
             (x, x as f32)
-        }))
+        });
+        self.feed_quiet_values(&mut pairs).0
+    }
+
+    /// `true` while waiting for a trigger: [`Detector::feed_quiet_values`] has work to do.
+    pub fn is_idle(&self) -> bool {
+        self.state == State::Idle
     }
 
     /// [`Detector::feed_quiet`] for samples given as `(raw, value)` pairs (see
     /// [`Detector::feed_value`]): the loop behind an equalised [`crate::Monitor::feed_slice`].
-    /// The pair that stops the loop is taken from the iterator but not fed: the caller goes on
-    /// from the returned count in its own slices.
+    /// Returns how many pairs it fed and the pair that stopped it, taken from the iterator
+    /// but not fed (`None` when the iterator ran out or the detector is not idle): the caller
+    /// feeds that one with [`Detector::feed_value`].
+    ///
+    /// The loop takes only what needs no decision: `|value - baseline|` within the trigger
+    /// level (so the baseline moves by the full step, unclamped), below full scale, and not
+    /// the repeat that completes a stuck run; any other sample goes to `feed_value`.
     #[inline(always)]
-    pub fn feed_quiet_values(&mut self, samples: impl Iterator<Item = (i32, f32)>) -> usize {
+    pub fn feed_quiet_values(
+        &mut self,
+        samples: &mut impl Iterator<Item = (i32, f32)>,
+    ) -> (usize, Option<(i32, f32)>) {
+        if self.state != State::Idle {
+            return (0, None);
+        }
         if self.ring_weight > 0.0 {
             self.quiet_loop::<true>(samples)
         } else {
@@ -422,52 +439,62 @@ impl<M: Backend> Detector<M> {
         }
     }
 
-    /// The quiet loop, tracking the quiet mean square (`RING`) or not.
+    /// The quiet loop, tracking the quiet mean square (`RING`) or not. The pre-trigger ring
+    /// is filled in runs up to its end, so that each sample is stored without a wrap test.
     #[inline(always)]
-    fn quiet_loop<const RING: bool>(&mut self, samples: impl Iterator<Item = (i32, f32)>) -> usize {
-        if self.state != State::Idle {
-            return 0;
-        }
-        let (weight, k2) = (self.ring_weight, RING_SIGMAS * RING_SIGMAS);
+    fn quiet_loop<const RING: bool>(
+        &mut self,
+        samples: &mut impl Iterator<Item = (i32, f32)>,
+    ) -> (usize, Option<(i32, f32)>) {
+        let (trigger, alpha, adc_max, weight) =
+            (self.trigger, self.alpha, self.adc_max, self.ring_weight);
         let mut ms = self.ring_ms;
-        let (trigger, alpha, adc_max) = (self.trigger, self.alpha, self.adc_max);
-        let floor = -trigger;
         // Stop before the repeat that completes a stuck run: `feed` reports it.
         let limit = self.stuck_limit.wrapping_sub(1);
-        let (mut baseline, mut previous, mut run, mut next) =
-            (self.baseline, self.previous, self.same_run, self.pre_next);
-        let mut n = 0usize;
-        for (x, value) in samples {
-            let v = value - baseline;
-            if (v > trigger && (!RING || v * v > k2 * ms)) || x >= adc_max {
-                break;
-            }
-            if RING {
-                ms += weight * (v * v - ms);
-            }
-            if x == previous {
-                if run >= limit {
-                    break;
+        let (mut baseline, mut previous, mut run) = (self.baseline, self.previous, self.same_run);
+        let start = self.pre_next;
+        let mut next = start;
+        let mut stop = None;
+        'runs: loop {
+            let ring = self.pre.get_mut(next & (PRE_TRIGGER - 1)..).unwrap_or(&mut []);
+            let len = ring.len();
+            for (i, slot) in ring.iter_mut().enumerate() {
+                let Some((x, value)) = samples.next() else {
+                    next = next.wrapping_add(i);
+                    break 'runs;
+                };
+                let v = value - baseline;
+                let repeat_ends_run = x == previous && run >= limit;
+                if !(v.abs() <= trigger) || x >= adc_max || repeat_ends_run {
+                    stop = Some((x, value));
+                    next = next.wrapping_add(i);
+                    break 'runs;
                 }
-                run += 1;
-            } else {
-                previous = x;
-                run = 0;
-            }
-            baseline += if v < floor { floor } else { v } * alpha;
-            if let Some(slot) = self.pre.get_mut(next & (PRE_TRIGGER - 1)) {
+                if x == previous {
+                    run += 1;
+                } else {
+                    previous = x;
+                    run = 0;
+                }
+                if RING {
+                    ms += weight * (v * v - ms);
+                }
+                baseline += v * alpha;
                 *slot = value;
             }
-            next = next.wrapping_add(1);
-            n += 1;
+            if len == 0 {
+                break;
+            }
+            next = next.wrapping_add(len);
         }
+        let n = next.wrapping_sub(start);
         self.baseline = baseline;
         self.ring_ms = ms;
         self.previous = previous;
         self.same_run = run;
         self.pre_next = next;
         self.next_index = self.next_index.wrapping_add(n as u64);
-        n
+        (n, stop)
     }
 
     /// Tells the detector that `lost` samples were dropped (e.g. a FIFO overrun). A pulse in

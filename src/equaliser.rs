@@ -232,23 +232,32 @@ impl ChainDynamics {
     }
 }
 
-/// One second-order section `k (w^2 + f1 w + f0) / (w^2 + e1 w + e0)` in `w = z - 1`, run as
-/// `y = k (v + g1 q + g0 p)`, `p <- p + q`, `q <- q + v - e1 q - e0 p` with `g1 = f1 - e1`,
-/// `g0 = f0 - e0` (`p = v / (w^2 + e1 w + e0)`, `q = w p`); `k = e0 / f0` gives unit DC gain.
+/// One second-order section `k (w^2 + f1 w + f0) / (w^2 + e1 w + e0)` in `w = z - 1`, run
+/// without its gain `k` (the gains of all sections are applied once, see
+/// [`EqualiserDesign`]) as `y = v + g1 q + g0 p`, `p <- p + q`, `q <- q + v - e1 q - e0 p`
+/// with `g1 = f1 - e1`, `g0 = f0 - e0` (`p = v / (w^2 + e1 w + e0)`, `q = w p`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 struct Section {
-    k: f32,
     g: [f32; 2],
     e: [f32; 2],
 }
 
 impl Section {
     const IDENTITY: Section = Section {
-        k: 1.0,
         g: [0.0, 0.0],
         e: [1.0, 1.0],
     };
+
+    /// One sample `v` through the section with states `st = [p, q]`: its output (before `k`).
+    #[inline(always)]
+    fn step(&self, st: &mut [f32; 2], v: f32) -> f32 {
+        let [g1, g0] = self.g;
+        let [e1, e0] = self.e;
+        let [p, q] = *st;
+        *st = [p + q, q + v - e1 * q - e0 * p];
+        v + g1 * q + g0 * p
+    }
 }
 
 /// The equaliser of a chain, discretised at the scene's sample rate (see the module docs).
@@ -257,11 +266,15 @@ impl Section {
 pub struct EqualiserDesign {
     sections: [Section; MAX_MODES],
     section_count: u8,
+    /// The sections' gains `prod k_j = prod e0_j / f0_j` (unit DC gain), applied once to the
+    /// sections' output (folded into the taps when there is an accelerometer stage).
+    gain: f32,
     taps: Option<Taps>,
     noise_gain: f32,
 }
 
-/// The accelerometer's FIR: `out_(n - delay) = sum_k c_k y_(n - k)`.
+/// The accelerometer's FIR: `out_(n - delay) = sum_k c_k y_(n - k)` (the taps times the
+/// sections' gain in an [`EqualiserDesign`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 struct Taps {
@@ -274,6 +287,7 @@ impl EqualiserDesign {
     pub const IDENTITY: EqualiserDesign = EqualiserDesign {
         sections: [Section::IDENTITY; MAX_MODES],
         section_count: 0,
+        gain: 1.0,
         taps: None,
         noise_gain: 1.0,
     };
@@ -295,19 +309,27 @@ impl EqualiserDesign {
         for (i, m) in dynamics.modes().iter().enumerate() {
             check_mode(m, i as u8, sample_rate_hz)?;
         }
-        if let Some(a) = &dynamics.accelerometer {
-            design.taps = Some(accelerometer_taps::<M>(a, t)?);
-        }
+        let taps = match &dynamics.accelerometer {
+            Some(a) => Some(accelerometer_taps::<M>(a, t)?),
+            None => None,
+        };
         if dynamics.mode_count > 0 {
             let zeros = beam_zeros::<M>(dynamics.modes())?;
             for (i, m) in dynamics.modes().iter().enumerate() {
                 let z = zeros.get(i).copied().unwrap_or_default();
                 if let Some(s) = design.sections.get_mut(i) {
-                    *s = matched_section::<M>(m, z, t);
+                    let (section, k) = matched_section::<M>(m, z, t);
+                    *s = section;
+                    design.gain *= k;
                 }
             }
             design.section_count = dynamics.mode_count;
         }
+        // The sections are linear: their gains move to the front of the chain, into the taps.
+        design.taps = taps.map(|mut t| {
+            t.c = t.c.map(|c| c * design.gain);
+            t
+        });
         design.noise_gain = M::sqrt(design.impulse_energy().max(0.0));
         Ok(design)
     }
@@ -629,17 +651,17 @@ fn pair<M: Backend>(sigma: f32, omega: f32, t: f32) -> [f32; 2] {
 }
 
 /// Mode `m`'s section: its poles (the inverse's zeros) over the chain zero `zero` (rad/s),
-/// both matched, unit gain at DC.
-fn matched_section<M: Backend>(m: &BeamMode, zero: C, t: f32) -> Section {
+/// both matched, and its gain `k = e0 / f0` (unit gain at DC).
+fn matched_section<M: Backend>(m: &BeamMode, zero: C, t: f32) -> (Section, f32) {
     let w = 2.0 * core::f32::consts::PI * m.frequency_hz;
     let z = m.damping_ratio;
     let [f1, f0] = pair::<M>(z * w, w * M::sqrt(1.0 - z * z), t);
     let [e1, e0] = pair::<M>(-zero.re, zero.im, t);
-    Section {
-        k: e0 / f0,
+    let section = Section {
         g: [f1 - e1, f0 - e0],
         e: [e1, e0],
-    }
+    };
+    (section, e0 / f0)
 }
 
 /// The equaliser's state: fed raw samples, it gives the reconstructed force in counts of the
@@ -683,67 +705,135 @@ impl Equaliser {
     /// Equalises `raw` into `out` (the shorter length of the two), sample by sample in order.
     #[inline]
     pub fn process<S: Copy + Into<i32>>(&mut self, raw: &[S], out: &mut [f32]) {
+        self.feed_to(raw, Store(out));
+    }
+
+    /// Equalises one sample.
+    #[inline]
+    pub fn step<S: Copy + Into<i32>>(&mut self, sample: S) -> f32 {
+        let mut out = [0.0f32];
+        self.process(&[sample], &mut out);
+        let [value] = out;
+        value
+    }
+
+    /// Runs `sink` over the equalised `(raw, value)` pairs of `raw`, with the filter
+    /// specialised for the design's section count and stage, its coefficients and states in
+    /// locals (registers) and written back once: the equaliser advances by exactly the
+    /// samples `sink` takes, so a sink that stops early (the detector's quiet loop) leaves it
+    /// where [`Equaliser::process`] on those samples would.
+    #[inline]
+    pub fn feed_to<S: Copy + Into<i32>, T: Sink>(&mut self, raw: &[S], sink: T) -> T::Output {
         let acc = self.design.taps.is_some();
         match (self.design.section_count, acc) {
-            (0, false) => self.run::<S, 0, false>(raw, out),
-            (0, true) => self.run::<S, 0, true>(raw, out),
-            (1, false) => self.run::<S, 1, false>(raw, out),
-            (1, true) => self.run::<S, 1, true>(raw, out),
-            (2, false) => self.run::<S, 2, false>(raw, out),
-            (2, true) => self.run::<S, 2, true>(raw, out),
-            (3, false) => self.run::<S, 3, false>(raw, out),
-            (3, true) => self.run::<S, 3, true>(raw, out),
-            (_, false) => self.run::<S, 4, false>(raw, out),
-            (_, true) => self.run::<S, 4, true>(raw, out),
+            (0, false) => self.run::<S, T, 0, false>(raw, sink),
+            (0, true) => self.run::<S, T, 0, true>(raw, sink),
+            (1, false) => self.run::<S, T, 1, false>(raw, sink),
+            (1, true) => self.run::<S, T, 1, true>(raw, sink),
+            (2, false) => self.run::<S, T, 2, false>(raw, sink),
+            (2, true) => self.run::<S, T, 2, true>(raw, sink),
+            (3, false) => self.run::<S, T, 3, false>(raw, sink),
+            (3, true) => self.run::<S, T, 3, true>(raw, sink),
+            (_, false) => self.run::<S, T, 4, false>(raw, sink),
+            (_, true) => self.run::<S, T, 4, true>(raw, sink),
         }
     }
 
     /// The loop for `K` sections, with or without the accelerometer's FIR: coefficients and
     /// states in locals so that they stay in registers.
     #[inline(always)]
-    fn run<S: Copy + Into<i32>, const K: usize, const ACC: bool>(
+    fn run<S: Copy + Into<i32>, T: Sink, const K: usize, const ACC: bool>(
         &mut self,
         raw: &[S],
-        out: &mut [f32],
-    ) {
-        let Some(first) = raw.first() else {
-            return;
+        sink: T,
+    ) -> T::Output {
+        let base = match (self.offset, raw.first()) {
+            (Some(o), _) => o,
+            (None, Some(first)) => *self.offset.insert((*first).into()),
+            (None, None) => 0,
+        } as f32;
+        let mut run = Run::<S, K, ACC> {
+            raw: raw.iter(),
+            base,
+            gain: self.design.gain,
+            sections: core::array::from_fn(|i| {
+                self.design
+                    .sections
+                    .get(i)
+                    .copied()
+                    .unwrap_or(Section::IDENTITY)
+            }),
+            state: core::array::from_fn(|i| self.state.get(i).copied().unwrap_or([0.0; 2])),
+            taps: self.design.taps.map_or([1.0, 0.0, 0.0, 0.0, 0.0], |t| t.c),
+            history: self.history,
         };
-        let base = *self.offset.get_or_insert((*first).into()) as f32;
-        let sections: [Section; K] = core::array::from_fn(|i| {
-            self.design
-                .sections
-                .get(i)
-                .copied()
-                .unwrap_or(Section::IDENTITY)
-        });
-        let mut state: [[f32; 2]; K] =
-            core::array::from_fn(|i| self.state.get(i).copied().unwrap_or([0.0; 2]));
-        let [c0, c1, c2, c3, c4] = self.design.taps.map_or([1.0, 0.0, 0.0, 0.0, 0.0], |t| t.c);
-        let [mut f1, mut f2, mut f3, mut f4] = self.history;
-        for (&s, o) in raw.iter().zip(out.iter_mut()) {
-            let x = s.into() as f32 - base;
-            // The FIR in transposed form: partial sums move, not inputs.
-            let mut v = if ACC {
-                let v = c0 * x + f1;
-                (f1, f2, f3, f4) = (c1 * x + f2, c2 * x + f3, c3 * x + f4, c4 * x);
-                v
-            } else {
-                x
-            };
-            for (sec, st) in sections.iter().zip(state.iter_mut()) {
-                let [g1, g0] = sec.g;
-                let [e1, e0] = sec.e;
-                let [p, q] = *st;
-                let y = sec.k * (v + g1 * q + g0 * p);
-                *st = [p + q, q + v - e1 * q - e0 * p];
-                v = y;
-            }
-            *o = v + base;
-        }
-        self.history = [f1, f2, f3, f4];
-        for (dst, src) in self.state.iter_mut().zip(state.iter()) {
+        let out = sink.take(&mut run);
+        self.history = run.history;
+        for (dst, src) in self.state.iter_mut().zip(run.state.iter()) {
             *dst = *src;
         }
+        out
+    }
+}
+
+/// What takes the equalised samples from [`Equaliser::feed_to`].
+pub trait Sink {
+    /// What it returns.
+    type Output;
+    /// Takes `(raw, value)` pairs, as many as it wants, in order: `raw` as the ADC gave it,
+    /// `value` reconstructed (counts of the rigid plate).
+    fn take(self, values: &mut impl Iterator<Item = (i32, f32)>) -> Self::Output;
+}
+
+/// The sink of [`Equaliser::process`]: stores the values.
+struct Store<'a>(&'a mut [f32]);
+
+impl Sink for Store<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn take(self, values: &mut impl Iterator<Item = (i32, f32)>) {
+        for (o, (_, v)) in self.0.iter_mut().zip(values) {
+            *o = v;
+        }
+    }
+}
+
+/// The equaliser over a block, its coefficients and states copied into locals.
+struct Run<'a, S, const K: usize, const ACC: bool> {
+    raw: core::slice::Iter<'a, S>,
+    base: f32,
+    gain: f32,
+    sections: [Section; K],
+    state: [[f32; 2]; K],
+    taps: [f32; 5],
+    history: [f32; 4],
+}
+
+impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Iterator for Run<'_, S, K, ACC> {
+    type Item = (i32, f32);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(i32, f32)> {
+        let raw: i32 = (*self.raw.next()?).into();
+        let x = raw as f32 - self.base;
+        let [c0, c1, c2, c3, c4] = self.taps;
+        let [f1, f2, f3, f4] = self.history;
+        // The FIR in transposed form: partial sums move, not inputs (the sections' gain is
+        // in its taps).
+        let mut v = if ACC {
+            self.history = [c1 * x + f2, c2 * x + f3, c3 * x + f4, c4 * x];
+            c0 * x + f1
+        } else {
+            x
+        };
+        for (sec, st) in self.sections.iter().zip(self.state.iter_mut()) {
+            v = sec.step(st, v);
+        }
+        let value = if ACC || K == 0 {
+            v + self.base
+        } else {
+            v * self.gain + self.base
+        };
+        Some((raw, value))
     }
 }

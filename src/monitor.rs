@@ -4,7 +4,7 @@
 use crate::classifier::{Measurement, Verdict};
 use crate::counters::Counters;
 use crate::detector::{Detection, Detector};
-use crate::equaliser::Equaliser;
+use crate::equaliser::{Equaliser, Sink};
 use crate::error::Error;
 use crate::flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 use crate::math::{Backend, DefaultBackend};
@@ -54,9 +54,6 @@ pub struct Monitor<
     counters: Counters<N>,
     flow: F,
 }
-
-/// Samples equalised at a time by [`Monitor::feed_slice`] (its stack buffer, 4 bytes each).
-pub const EQUALISE_BLOCK: usize = 32;
 
 impl<const N: usize, M: Backend> Monitor<N, M, NoFlow> {
     /// A monitor for a built scene.
@@ -117,9 +114,7 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         let d = if self.equaliser.design().is_identity() {
             self.detector.feed(sample)?
         } else {
-            let mut value = [0.0f32];
-            self.equaliser.process(&[sample], &mut value);
-            let [value] = value;
+            let value = self.equaliser.step(sample);
             self.detector.feed_value(sample, value)?
         };
         Some(self.handle(d))
@@ -134,9 +129,7 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         mut on_event: impl FnMut(Event),
     ) {
         if !self.equaliser.design().is_identity() {
-            for block in samples.chunks(EQUALISE_BLOCK) {
-                self.feed_block_equalised(block, &mut on_event);
-            }
+            self.feed_slice_equalised(samples, &mut on_event);
             return;
         }
         let mut rest = samples;
@@ -156,32 +149,38 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         }
     }
 
-    /// One block of at most [`EQUALISE_BLOCK`] samples through the equaliser, then the
-    /// detector: its quiet loop as far as it goes, one sample at a time where something happens.
-    fn feed_block_equalised<S: Copy + Into<i32>>(
+    /// [`Monitor::feed_slice`] behind a chain: while the detector is idle, the equaliser
+    /// feeds its quiet loop directly, one pass per sample ([`Equaliser::feed_to`]); the
+    /// sample that stops it (already equalised) and those of a pulse go one at a time
+    /// through [`Detector::feed_value`].
+    fn feed_slice_equalised<S: Copy + Into<i32>>(
         &mut self,
-        block: &[S],
+        samples: &[S],
         on_event: &mut impl FnMut(Event),
     ) {
-        let mut values = [0.0f32; EQUALISE_BLOCK];
-        self.equaliser.process(block, &mut values);
-        let values = values.get(..block.len()).unwrap_or(&[]);
-        let mut at = 0;
+        let mut rest = samples;
         loop {
-            let raw = block.get(at..).unwrap_or(&[]);
-            let rest = values.get(at..).unwrap_or(&[]);
-            let pairs = raw.iter().map(|&s| s.into()).zip(rest.iter().copied());
-            at += self.detector.feed_quiet_values(pairs);
-            let (Some(&s), Some(&v)) = (block.get(at), values.get(at)) else {
+            let (quiet, stop) = if self.detector.is_idle() {
+                self.equaliser
+                    .feed_to(rest, QuietLoop(&mut self.detector))
+            } else {
+                (0, None)
+            };
+            rest = rest.get(quiet..).unwrap_or(&[]);
+            let Some((&s, tail)) = rest.split_first() else {
                 return;
             };
-            if let Some(d) = self.detector.feed_value(s.into(), v) {
+            let value = match stop {
+                Some((_, value)) => value,
+                None => self.equaliser.step(s),
+            };
+            if let Some(d) = self.detector.feed_value(s.into(), value) {
                 on_event(self.handle(d));
                 if let Some(e) = self.take_flow_event() {
                     on_event(e);
                 }
             }
-            at += 1;
+            rest = tail;
         }
     }
 
@@ -263,5 +262,16 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
     /// The counters.
     pub fn counters(&self) -> &Counters<N> {
         &self.counters
+    }
+}
+
+/// The detector's quiet loop as the equaliser's sink ([`Detector::feed_quiet_values`]).
+struct QuietLoop<'a, M: Backend>(&'a mut Detector<M>);
+
+impl<M: Backend> Sink for QuietLoop<'_, M> {
+    type Output = (usize, Option<(i32, f32)>);
+    #[inline(always)]
+    fn take(self, values: &mut impl Iterator<Item = (i32, f32)>) -> Self::Output {
+        self.0.feed_quiet_values(values)
     }
 }
