@@ -45,6 +45,7 @@
 //!   noise is `sqrt(w)` smaller.
 
 use crate::classifier::{Measurement, RejectReason};
+use crate::equaliser::Pairs;
 use crate::math::{self, Backend, DefaultBackend};
 use crate::scene::Scene;
 
@@ -246,8 +247,11 @@ pub struct Detector<M: Backend = DefaultBackend> {
     adc_noisy: bool,
     /// Weight per sample of the quiet signal's mean square (0: not tracked, a rigid chain).
     ring_weight: f32,
-    /// The quiet signal's mean square about the baseline (counts^2).
-    ring_ms: f32,
+    /// `1 - ring_weight`, the decay per sample of `ring_sum`.
+    ring_decay: f32,
+    /// The quiet signal's mean square about the baseline over `ring_weight` (counts^2):
+    /// `S <- (1 - w) S + v^2` (see [`ring_sum_step`]).
+    ring_sum: f32,
     adc_min: i32,
     adc_max: i32,
     dt_s: f32,
@@ -304,7 +308,12 @@ impl<M: Backend> Detector<M> {
             } else {
                 1.0 - M::exp(-1.0 / (RING_TAU_S * fs))
             },
-            ring_ms: 0.0,
+            ring_decay: if scene.equaliser().is_identity() {
+                0.0
+            } else {
+                M::exp(-1.0 / (RING_TAU_S * fs))
+            },
+            ring_sum: 0.0,
             adc_min: sensor.adc_min,
             adc_max: sensor.adc_max,
             dt_s: 1.0 / fs,
@@ -403,35 +412,18 @@ impl<M: Backend> Detector<M> {
     /// [`crate::Monitor::feed_slice`].
     #[inline]
     pub fn feed_quiet<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> usize {
-        let mut pairs = samples.iter().map(|&s| {
+        self.feed_quiet_values(samples.iter().map(|&s| {
             let x: i32 = s.into();
             (x, x as f32)
-        });
-        self.feed_quiet_values(&mut pairs).0
-    }
-
-    /// `true` while waiting for a trigger: [`Detector::feed_quiet_values`] has work to do.
-    pub fn is_idle(&self) -> bool {
-        self.state == State::Idle
+        }))
     }
 
     /// [`Detector::feed_quiet`] for samples given as `(raw, value)` pairs (see
     /// [`Detector::feed_value`]): the loop behind an equalised [`crate::Monitor::feed_slice`].
-    /// Returns how many pairs it fed and the pair that stopped it, taken from the iterator
-    /// but not fed (`None` when the iterator ran out or the detector is not idle): the caller
-    /// feeds that one with [`Detector::feed_value`].
-    ///
-    /// The loop takes only what needs no decision: `|value - baseline|` within the trigger
-    /// level (so the baseline moves by the full step, unclamped), below full scale, and not
-    /// the repeat that completes a stuck run; any other sample goes to `feed_value`.
+    /// The pair that stops the loop is taken from the iterator but not fed: the caller goes on
+    /// from the returned count in its own slices.
     #[inline(always)]
-    pub fn feed_quiet_values(
-        &mut self,
-        samples: &mut impl Iterator<Item = (i32, f32)>,
-    ) -> (usize, Option<(i32, f32)>) {
-        if self.state != State::Idle {
-            return (0, None);
-        }
+    pub fn feed_quiet_values(&mut self, samples: impl Iterator<Item = (i32, f32)>) -> usize {
         if self.ring_weight > 0.0 {
             self.quiet_loop::<true>(samples)
         } else {
@@ -439,57 +431,107 @@ impl<M: Backend> Detector<M> {
         }
     }
 
-    /// The quiet loop, tracking the quiet mean square (`RING`) or not. The pre-trigger ring
-    /// is filled in runs up to its end, so that each sample is stored without a wrap test.
+    /// The quiet loop, tracking the quiet mean square (`RING`) or not.
     #[inline(always)]
-    fn quiet_loop<const RING: bool>(
-        &mut self,
-        samples: &mut impl Iterator<Item = (i32, f32)>,
-    ) -> (usize, Option<(i32, f32)>) {
-        let (trigger, alpha, adc_max, weight) =
-            (self.trigger, self.alpha, self.adc_max, self.ring_weight);
-        let mut ms = self.ring_ms;
+    fn quiet_loop<const RING: bool>(&mut self, samples: impl Iterator<Item = (i32, f32)>) -> usize {
+        if self.state != State::Idle {
+            return 0;
+        }
+        let (decay, k2) = (self.ring_decay, RING_SIGMAS * RING_SIGMAS);
+        let weighted_k2 = k2 * self.ring_weight;
+        let mut ms = self.ring_sum;
+        let (trigger, alpha, adc_max) = (self.trigger, self.alpha, self.adc_max);
+        let floor = -trigger;
         // Stop before the repeat that completes a stuck run: `feed` reports it.
         let limit = self.stuck_limit.wrapping_sub(1);
-        let (mut baseline, mut previous, mut run) = (self.baseline, self.previous, self.same_run);
-        let start = self.pre_next;
-        let mut next = start;
-        let mut stop = None;
-        'runs: loop {
-            let ring = self.pre.get_mut(next & (PRE_TRIGGER - 1)..).unwrap_or(&mut []);
-            let len = ring.len();
-            for (i, slot) in ring.iter_mut().enumerate() {
-                let Some((x, value)) = samples.next() else {
-                    next = next.wrapping_add(i);
-                    break 'runs;
-                };
-                let v = value - baseline;
-                let repeat_ends_run = x == previous && run >= limit;
-                if !(v.abs() <= trigger) || x >= adc_max || repeat_ends_run {
-                    stop = Some((x, value));
-                    next = next.wrapping_add(i);
-                    break 'runs;
-                }
-                if x == previous {
-                    run += 1;
-                } else {
-                    previous = x;
-                    run = 0;
-                }
-                if RING {
-                    ms += weight * (v * v - ms);
-                }
-                baseline += v * alpha;
-                *slot = value;
-            }
-            if len == 0 {
+        let (mut baseline, mut previous, mut run, mut next) =
+            (self.baseline, self.previous, self.same_run, self.pre_next);
+        let mut n = 0usize;
+        for (x, value) in samples {
+            let v = value - baseline;
+            if (v > trigger && (!RING || v * v > weighted_k2 * ms)) || x >= adc_max {
                 break;
             }
-            next = next.wrapping_add(len);
+            if x == previous {
+                if run >= limit {
+                    break;
+                }
+                run += 1;
+            } else {
+                previous = x;
+                run = 0;
+            }
+            if RING {
+                ms = ring_sum_step(ms, decay, v);
+            }
+            baseline += if v < floor { floor } else { v } * alpha;
+            if let Some(slot) = self.pre.get_mut(next & (PRE_TRIGGER - 1)) {
+                *slot = value;
+            }
+            next = next.wrapping_add(1);
+            n += 1;
         }
+        self.baseline = baseline;
+        self.ring_sum = ms;
+        self.previous = previous;
+        self.same_run = run;
+        self.pre_next = next;
+        self.next_index = self.next_index.wrapping_add(n as u64);
+        n
+    }
+
+    /// `true` while waiting for a trigger: [`Detector::feed_quiet_pairs`] has work to do.
+    pub fn is_idle(&self) -> bool {
+        self.state == State::Idle
+    }
+
+    /// The quiet loop behind an equaliser ([`crate::Monitor::feed_slice`] behind a chain):
+    /// feeds the equalised samples of `pairs` while nothing happens, straight into the
+    /// pre-trigger ring (in runs up to its end, so that each is stored without a wrap test).
+    /// Returns how many it fed and the `(raw, value)` that stopped it, taken from `pairs` but
+    /// not fed (`None` when `pairs` ran out or the detector is not idle): the caller feeds
+    /// that one with [`Detector::feed_value`]. The state afterwards is exactly what
+    /// `feed_value` on each fed pair would leave.
+    ///
+    /// The loop takes only what needs no decision: `|value - baseline|` within the trigger
+    /// level (so that the baseline moves by the whole step), below full scale, and not the
+    /// repeat that completes a stuck run; any other sample goes to `feed_value`.
+    #[inline(always)]
+    pub fn feed_quiet_pairs(&mut self, pairs: &mut impl Pairs) -> (usize, Option<(i32, f32)>) {
+        if self.state != State::Idle {
+            return (0, None);
+        }
+        let (trigger, alpha, adc_max, decay) =
+            (self.trigger, self.alpha, self.adc_max, self.ring_decay);
+        let limit = self.stuck_limit.wrapping_sub(1);
+        let (mut baseline, mut ms, mut previous, mut run) =
+            (self.baseline, self.ring_sum, self.previous, self.same_run);
+        let start = self.pre_next;
+        let mut next = start;
+        let stop = loop {
+            let ring = self.pre.get_mut(next & (PRE_TRIGGER - 1)..).unwrap_or(&mut []);
+            let room = ring.len();
+            let (fed, stop) = pairs.each(ring, |slot, x, value| {
+                let v = value - baseline;
+                let repeat = x == previous;
+                if !(v.abs() <= trigger) || x >= adc_max || (repeat && run >= limit) {
+                    return false;
+                }
+                run = if repeat { run + 1 } else { 0 };
+                previous = x;
+                ms = ring_sum_step(ms, decay, v);
+                baseline += v * alpha;
+                *slot = value;
+                true
+            });
+            next = next.wrapping_add(fed);
+            if stop.is_some() || fed < room || room == 0 {
+                break stop;
+            }
+        };
         let n = next.wrapping_sub(start);
         self.baseline = baseline;
-        self.ring_ms = ms;
+        self.ring_sum = ms;
         self.previous = previous;
         self.same_run = run;
         self.pre_next = next;
@@ -604,16 +646,23 @@ impl<M: Backend> Detector<M> {
     /// [`Detector::feed_quiet_values`]).
     #[inline(always)]
     fn above_ringing(&self, v: f32) -> bool {
-        self.ring_weight <= 0.0 || v * v > RING_SIGMAS * RING_SIGMAS * self.ring_ms
+        self.ring_weight <= 0.0 || v * v > RING_SIGMAS * RING_SIGMAS * self.ring_ms()
     }
 
     /// A quiet sample `v` joins the quiet mean square (behind a non-rigid chain), exactly as
-    /// in [`Detector::feed_quiet_values`].
+    /// in [`Detector::feed_quiet_values`] and [`Detector::feed_quiet_pairs`].
     #[inline(always)]
     fn track_ringing(&mut self, v: f32) {
         if self.ring_weight > 0.0 {
-            self.ring_ms += self.ring_weight * (v * v - self.ring_ms);
+            self.ring_sum = ring_sum_step(self.ring_sum, self.ring_decay, v);
         }
+    }
+
+    /// The quiet signal's mean square about the baseline (counts^2), `w S`: an exponential
+    /// average with weight `w` per sample.
+    #[inline(always)]
+    fn ring_ms(&self) -> f32 {
+        self.ring_weight * self.ring_sum
     }
 
     fn track_baseline(&mut self, value: f32) {
@@ -634,7 +683,7 @@ impl<M: Backend> Detector<M> {
     ) -> Option<Detection> {
         let mut p = Pulse::EMPTY;
         let ring = if self.ring_weight > 0.0 {
-            M::sqrt(self.ring_ms)
+            M::sqrt(self.ring_ms())
         } else {
             0.0
         };
@@ -887,6 +936,13 @@ impl<M: Backend> Detector<M> {
             }),
         }
     }
+}
+
+/// One quiet sample `v` into the scaled mean square `sum` (`ms / w`, see
+/// [`Detector::ring_ms`]): `sum (1 - w) + v^2`, a multiply and a multiply-add.
+#[inline(always)]
+fn ring_sum_step(sum: f32, decay: f32, v: f32) -> f32 {
+    sum * decay + v * v
 }
 
 /// The box filter over a pulse's top for a scene whose shortest pulse is `shortest_samples`

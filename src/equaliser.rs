@@ -255,8 +255,10 @@ impl Section {
         let [g1, g0] = self.g;
         let [e1, e0] = self.e;
         let [p, q] = *st;
-        *st = [p + q, q + v - e1 * q - e0 * p];
-        v + g1 * q + g0 * p
+        let y = v + g1 * q + g0 * p;
+        let d = v - e1 * q - e0 * p;
+        *st = [p + q, q + d];
+        y
     }
 }
 
@@ -753,7 +755,7 @@ impl Equaliser {
             (None, None) => 0,
         } as f32;
         let mut run = Run::<S, K, ACC> {
-            raw: raw.iter(),
+            raw,
             base,
             gain: self.design.gain,
             sections: core::array::from_fn(|i| {
@@ -780,9 +782,22 @@ impl Equaliser {
 pub trait Sink {
     /// What it returns.
     type Output;
-    /// Takes `(raw, value)` pairs, as many as it wants, in order: `raw` as the ADC gave it,
-    /// `value` reconstructed (counts of the rigid plate).
-    fn take(self, values: &mut impl Iterator<Item = (i32, f32)>) -> Self::Output;
+    /// Takes equalised samples from `pairs`, as many as it wants, in order.
+    fn take(self, pairs: &mut impl Pairs) -> Self::Output;
+}
+
+/// Equalised samples handed to a [`Sink`]: the ADC's samples, each with its reconstructed
+/// value (counts of the rigid plate).
+pub trait Pairs {
+    /// Equalises the next samples, one per slot of `slots`, and calls `f(slot, raw, value)`
+    /// on each until it returns `false` or the slots or the samples run out. Returns how
+    /// many calls returned `true`, and the `(raw, value)` of the one that returned `false`
+    /// (taken, and the equaliser advanced past it).
+    fn each(
+        &mut self,
+        slots: &mut [f32],
+        f: impl FnMut(&mut f32, i32, f32) -> bool,
+    ) -> (usize, Option<(i32, f32)>);
 }
 
 /// The sink of [`Equaliser::process`]: stores the values.
@@ -791,16 +806,17 @@ struct Store<'a>(&'a mut [f32]);
 impl Sink for Store<'_> {
     type Output = ();
     #[inline(always)]
-    fn take(self, values: &mut impl Iterator<Item = (i32, f32)>) {
-        for (o, (_, v)) in self.0.iter_mut().zip(values) {
+    fn take(self, pairs: &mut impl Pairs) {
+        pairs.each(self.0, |o, _, v| {
             *o = v;
-        }
+            true
+        });
     }
 }
 
 /// The equaliser over a block, its coefficients and states copied into locals.
 struct Run<'a, S, const K: usize, const ACC: bool> {
-    raw: core::slice::Iter<'a, S>,
+    raw: &'a [S],
     base: f32,
     gain: f32,
     sections: [Section; K],
@@ -809,12 +825,10 @@ struct Run<'a, S, const K: usize, const ACC: bool> {
     history: [f32; 4],
 }
 
-impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Iterator for Run<'_, S, K, ACC> {
-    type Item = (i32, f32);
-
+impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Run<'_, S, K, ACC> {
+    /// One sample through the FIR and the sections.
     #[inline(always)]
-    fn next(&mut self) -> Option<(i32, f32)> {
-        let raw: i32 = (*self.raw.next()?).into();
+    fn equalise(&mut self, raw: i32) -> f32 {
         let x = raw as f32 - self.base;
         let [c0, c1, c2, c3, c4] = self.taps;
         let [f1, f2, f3, f4] = self.history;
@@ -829,11 +843,34 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Iterator for Run<'_, 
         for (sec, st) in self.sections.iter().zip(self.state.iter_mut()) {
             v = sec.step(st, v);
         }
-        let value = if ACC || K == 0 {
+        if ACC || K == 0 {
             v + self.base
         } else {
             v * self.gain + self.base
-        };
-        Some((raw, value))
+        }
+    }
+}
+
+impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, K, ACC> {
+    #[inline(always)]
+    fn each(
+        &mut self,
+        slots: &mut [f32],
+        mut f: impl FnMut(&mut f32, i32, f32) -> bool,
+    ) -> (usize, Option<(i32, f32)>) {
+        let raw = self.raw;
+        let mut fed = slots.len().min(raw.len());
+        let mut stop = None;
+        for (i, (slot, &s)) in slots.iter_mut().zip(raw.iter()).enumerate() {
+            let x: i32 = s.into();
+            let value = self.equalise(x);
+            if !f(slot, x, value) {
+                stop = Some((x, value));
+                fed = i;
+                break;
+            }
+        }
+        self.raw = raw.get(fed + stop.is_some() as usize..).unwrap_or(&[]);
+        (fed, stop)
     }
 }

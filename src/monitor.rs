@@ -4,7 +4,7 @@
 use crate::classifier::{Measurement, Verdict};
 use crate::counters::Counters;
 use crate::detector::{Detection, Detector};
-use crate::equaliser::{Equaliser, Sink};
+use crate::equaliser::{Equaliser, Pairs, Sink};
 use crate::error::Error;
 use crate::flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 use crate::math::{Backend, DefaultBackend};
@@ -265,13 +265,13 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
     }
 }
 
-/// The detector's quiet loop as the equaliser's sink ([`Detector::feed_quiet_values`]).
+/// The detector's quiet loop as the equaliser's sink ([`Detector::feed_quiet_pairs`]).
 struct QuietLoop<'a, M: Backend>(&'a mut Detector<M>);
 
 impl<M: Backend> Sink for QuietLoop<'_, M> {
     type Output = (usize, Option<(i32, f32)>);
     #[inline(always)]
-    fn take(self, values: &mut impl Iterator<Item = (i32, f32)>) -> Self::Output {
-        self.0.feed_quiet_values(values)
+    fn take(self, pairs: &mut impl Pairs) -> Self::Output {
+        self.0.feed_quiet_pairs(pairs)
     }
 }
