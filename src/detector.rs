@@ -249,8 +249,8 @@ pub struct Detector<M: Backend = DefaultBackend> {
     ring_weight: f32,
     /// `1 - ring_weight`, the decay per sample of `ring_sum`.
     ring_decay: f32,
-    /// The quiet signal's mean square about the baseline over `ring_weight` (counts^2):
-    /// `S <- (1 - w) S + v^2` (see [`ring_sum_step`]).
+    /// The quiet signal's mean square about the baseline over `ring_weight / ring_decay`
+    /// (counts^2): `S <- (S + v^2) (1 - w)` (see [`ring_sum_step`]).
     ring_sum: f32,
     adc_min: i32,
     adc_max: i32,
@@ -438,7 +438,7 @@ impl<M: Backend> Detector<M> {
             return 0;
         }
         let (decay, k2) = (self.ring_decay, RING_SIGMAS * RING_SIGMAS);
-        let weighted_k2 = k2 * self.ring_weight;
+        let weighted_k2 = k2 * self.ring_scale();
         let mut ms = self.ring_sum;
         let (trigger, alpha, adc_max) = (self.trigger, self.alpha, self.adc_max);
         let floor = -trigger;
@@ -658,11 +658,17 @@ impl<M: Backend> Detector<M> {
         }
     }
 
-    /// The quiet signal's mean square about the baseline (counts^2), `w S`: an exponential
-    /// average with weight `w` per sample.
+    /// The quiet signal's mean square about the baseline (counts^2), `S w / (1 - w)`: an
+    /// exponential average with weight `w` per sample.
     #[inline(always)]
     fn ring_ms(&self) -> f32 {
-        self.ring_weight * self.ring_sum
+        self.ring_scale() * self.ring_sum
+    }
+
+    /// `w / (1 - w)`: the quiet mean square per unit of `ring_sum`.
+    #[inline(always)]
+    fn ring_scale(&self) -> f32 {
+        self.ring_weight / self.ring_decay
     }
 
     fn track_baseline(&mut self, value: f32) {
@@ -938,11 +944,12 @@ impl<M: Backend> Detector<M> {
     }
 }
 
-/// One quiet sample `v` into the scaled mean square `sum` (`ms / w`, see
-/// [`Detector::ring_ms`]): `sum (1 - w) + v^2`, a multiply and a multiply-add.
+/// One quiet sample `v` into the scaled mean square `sum` (`ms (1 - w) / w`, see
+/// [`Detector::ring_ms`]): `(sum + v^2) (1 - w)`, a multiply-add and a multiply, both in
+/// place.
 #[inline(always)]
 fn ring_sum_step(sum: f32, decay: f32, v: f32) -> f32 {
-    sum * decay + v * v
+    (sum + v * v) * decay
 }
 
 /// The box filter over a pulse's top for a scene whose shortest pulse is `shortest_samples`

@@ -859,18 +859,16 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, 
         mut f: impl FnMut(&mut f32, i32, f32) -> bool,
     ) -> (usize, Option<(i32, f32)>) {
         let raw = self.raw;
-        let mut fed = slots.len().min(raw.len());
-        let mut stop = None;
+        let n = slots.len().min(raw.len());
         for (i, (slot, &s)) in slots.iter_mut().zip(raw.iter()).enumerate() {
             let x: i32 = s.into();
             let value = self.equalise(x);
             if !f(slot, x, value) {
-                stop = Some((x, value));
-                fed = i;
-                break;
+                self.raw = raw.get(i + 1..).unwrap_or(&[]);
+                return (i, Some((x, value)));
             }
         }
-        self.raw = raw.get(fed + stop.is_some() as usize..).unwrap_or(&[]);
-        (fed, stop)
+        self.raw = raw.get(n..).unwrap_or(&[]);
+        (n, None)
     }
 }
