@@ -503,6 +503,8 @@ impl<M: Backend> Detector<M> {
         }
         let (trigger, alpha, adc_max, decay) =
             (self.trigger, self.alpha, self.adc_max, self.ring_decay);
+        // A repeat of the previous raw sample may take `same_run` up to `limit`, never to
+        // the `stuck_limit` that completes a stuck run (that one goes to `feed_value`).
         let limit = self.stuck_limit.wrapping_sub(1);
         let (mut baseline, mut ms, mut previous, mut run) =
             (self.baseline, self.ring_sum, self.previous, self.same_run);
@@ -510,23 +512,32 @@ impl<M: Backend> Detector<M> {
         let mut next = start;
         let stop = loop {
             let ring = self.pre.get_mut(next & (PRE_TRIGGER - 1)..).unwrap_or(&mut []);
-            let room = ring.len();
-            let (fed, stop) = pairs.each(ring, |slot, x, value| {
+            // Few enough samples that no run of repeats among them reaches `limit`: the loop
+            // needs no stuck test, the repeats are counted once the samples are fed.
+            let room = ring.len().min(limit.saturating_sub(run) as usize);
+            let ring = ring.get_mut(..room).unwrap_or(&mut []);
+            let fed = pairs.each(ring, |slot, x, value| {
                 let v = value - baseline;
-                let repeat = x == previous;
-                if !(v.abs() <= trigger) || x >= adc_max || (repeat && run >= limit) {
+                if !(v.abs() <= trigger) || x >= adc_max {
                     return false;
                 }
-                run = if repeat { run + 1 } else { 0 };
-                previous = x;
                 ms = ring_sum_step(ms, decay, v);
                 baseline += v * alpha;
                 *slot = value;
                 true
             });
-            next = next.wrapping_add(fed);
-            if stop.is_some() || fed < room || room == 0 {
-                break stop;
+            next = next.wrapping_add(fed.count);
+            if let Some((first, last)) = fed.ends {
+                // `room` bounds the sum: no overflow past `limit`.
+                run = if fed.repeats + 1 < fed.count || first != previous {
+                    fed.repeats as u16
+                } else {
+                    run + fed.count as u16
+                };
+                previous = last;
+            }
+            if fed.stop.is_some() || fed.count < room || room == 0 {
+                break fed.stop;
             }
         };
         let n = next.wrapping_sub(start);

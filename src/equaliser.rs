@@ -790,14 +790,23 @@ pub trait Sink {
 /// value (counts of the rigid plate).
 pub trait Pairs {
     /// Equalises the next samples, one per slot of `slots`, and calls `f(slot, raw, value)`
-    /// on each until it returns `false` or the slots or the samples run out. Returns how
-    /// many calls returned `true`, and the `(raw, value)` of the one that returned `false`
-    /// (taken, and the equaliser advanced past it).
-    fn each(
-        &mut self,
-        slots: &mut [f32],
-        f: impl FnMut(&mut f32, i32, f32) -> bool,
-    ) -> (usize, Option<(i32, f32)>);
+    /// on each until it returns `false` or the slots or the samples run out (see [`Fed`]).
+    fn each(&mut self, slots: &mut [f32], f: impl FnMut(&mut f32, i32, f32) -> bool) -> Fed;
+}
+
+/// What [`Pairs::each`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fed {
+    /// Samples fed (calls that returned `true`).
+    pub count: usize,
+    /// The `(raw, value)` of the call that returned `false`: taken, the equaliser advanced
+    /// past it, not fed.
+    pub stop: Option<(i32, f32)>,
+    /// The first and the last raw sample fed.
+    pub ends: Option<(i32, i32)>,
+    /// How many fed samples, counted back from the last, equal the one fed before them
+    /// (`count - 1` when all are equal).
+    pub repeats: usize,
 }
 
 /// The sink of [`Equaliser::process`]: stores the values.
@@ -853,22 +862,34 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Run<'_, S, K, ACC> {
 
 impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, K, ACC> {
     #[inline(always)]
-    fn each(
-        &mut self,
-        slots: &mut [f32],
-        mut f: impl FnMut(&mut f32, i32, f32) -> bool,
-    ) -> (usize, Option<(i32, f32)>) {
+    fn each(&mut self, slots: &mut [f32], mut f: impl FnMut(&mut f32, i32, f32) -> bool) -> Fed {
         let raw = self.raw;
-        let n = slots.len().min(raw.len());
+        let mut count = slots.len().min(raw.len());
+        let mut stop = None;
         for (i, (slot, &s)) in slots.iter_mut().zip(raw.iter()).enumerate() {
             let x: i32 = s.into();
             let value = self.equalise(x);
             if !f(slot, x, value) {
-                self.raw = raw.get(i + 1..).unwrap_or(&[]);
-                return (i, Some((x, value)));
+                (count, stop) = (i, Some((x, value)));
+                break;
             }
         }
-        self.raw = raw.get(n..).unwrap_or(&[]);
-        (n, None)
+        self.raw = raw.get(count + stop.is_some() as usize..).unwrap_or(&[]);
+        // Repeated raw samples, counted here once per call rather than in the loop.
+        let fed = raw.get(..count).unwrap_or(&[]);
+        let repeats = fed
+            .windows(2)
+            .rev()
+            .take_while(|w| match w {
+                [a, b] => (*a).into() == (*b).into(),
+                _ => false,
+            })
+            .count();
+        Fed {
+            count,
+            stop,
+            ends: fed.first().zip(fed.last()).map(|(&a, &b)| (a.into(), b.into())),
+            repeats,
+        }
     }
 }
