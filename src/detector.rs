@@ -516,9 +516,9 @@ impl<M: Backend> Detector<M> {
             // needs no stuck test, the repeats are counted once the samples are fed.
             let room = ring.len().min(limit.saturating_sub(run) as usize);
             let ring = ring.get_mut(..room).unwrap_or(&mut []);
-            let fed = pairs.each(ring, |slot, x, value| {
+            let fed = pairs.each(ring, adc_max, |slot, _, value| {
                 let v = value - baseline;
-                if !(v.abs() <= trigger) || x >= adc_max {
+                if !(v.abs() <= trigger) {
                     return false;
                 }
                 ms = ring_sum_step(ms, decay, v);

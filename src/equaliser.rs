@@ -674,8 +674,7 @@ pub struct Equaliser {
     design: EqualiserDesign,
     /// States `(p, q)` of each section.
     state: [[f32; 2]; MAX_MODES],
-    /// The accelerometer FIR's partial sums (transposed form): `f_k` holds
-    /// `sum_(j >= k) c_j y_(n + k - j)` of the inputs so far.
+    /// The accelerometer FIR's last four inputs, newest first (relative to `offset`).
     history: [f32; 4],
     /// The first sample seen: every input is taken relative to it (and it is added back to
     /// the output, the chain's DC gain being 1), so that the states stay small and keep
@@ -754,8 +753,7 @@ impl Equaliser {
             (None, Some(first)) => *self.offset.insert((*first).into()),
             (None, None) => 0,
         } as f32;
-        let mut run = Run::<S, K, ACC> {
-            raw,
+        let filter = Filter::<K, ACC> {
             base,
             gain: self.design.gain,
             sections: core::array::from_fn(|i| {
@@ -766,12 +764,17 @@ impl Equaliser {
                     .unwrap_or(Section::IDENTITY)
             }),
             state: core::array::from_fn(|i| self.state.get(i).copied().unwrap_or([0.0; 2])),
+        };
+        let mut run = Run::<S, K, ACC> {
+            raw,
+            filter,
             taps: self.design.taps.map_or([1.0, 0.0, 0.0, 0.0, 0.0], |t| t.c),
             history: self.history,
+            ahead: [0.0; AHEAD],
         };
         let out = sink.take(&mut run);
         self.history = run.history;
-        for (dst, src) in self.state.iter_mut().zip(run.state.iter()) {
+        for (dst, src) in self.state.iter_mut().zip(run.filter.state.iter()) {
             *dst = *src;
         }
         out
@@ -789,9 +792,19 @@ pub trait Sink {
 /// Equalised samples handed to a [`Sink`]: the ADC's samples, each with its reconstructed
 /// value (counts of the rigid plate).
 pub trait Pairs {
-    /// Equalises the next samples, one per slot of `slots`, and calls `f(slot, raw, value)`
-    /// on each until it returns `false` or the slots or the samples run out (see [`Fed`]).
-    fn each(&mut self, slots: &mut [f32], f: impl FnMut(&mut f32, i32, f32) -> bool) -> Fed;
+    /// Equalises the next samples, one per slot of `slots` (at most 32), and calls
+    /// `f(slot, raw, value)` on each until it returns `false`, a raw sample is at or above
+    /// `raw_max` (taken, not fed to `f`: a stop too), or the slots or the samples run out
+    /// (see [`Fed`]).
+    fn each(
+        &mut self,
+        slots: &mut [f32],
+        raw_max: i32,
+        f: impl FnMut(&mut f32, i32, f32) -> bool,
+    ) -> Fed;
+
+    /// Equalises the next samples into `out`, one per slot, until either runs out.
+    fn fill(&mut self, out: &mut [f32]);
 }
 
 /// What [`Pairs::each`] did.
@@ -799,8 +812,8 @@ pub trait Pairs {
 pub struct Fed {
     /// Samples fed (calls that returned `true`).
     pub count: usize,
-    /// The `(raw, value)` of the call that returned `false`: taken, the equaliser advanced
-    /// past it, not fed.
+    /// The `(raw, value)` that stopped it (`f` returned `false`, or the raw sample was at or
+    /// above `raw_max`): taken, the equaliser advanced past it, not fed.
     pub stop: Option<(i32, f32)>,
     /// The first and the last raw sample fed.
     pub ends: Option<(i32, i32)>,
@@ -816,39 +829,67 @@ impl Sink for Store<'_> {
     type Output = ();
     #[inline(always)]
     fn take(self, pairs: &mut impl Pairs) {
-        pairs.each(self.0, |o, _, v| {
-            *o = v;
-            true
-        });
+        pairs.fill(self.0);
     }
 }
+
+/// Samples the accelerometer's FIR runs ahead of the sections in [`Pairs::each`].
+const AHEAD: usize = 32;
 
 /// The equaliser over a block, its coefficients and states copied into locals.
 struct Run<'a, S, const K: usize, const ACC: bool> {
     raw: &'a [S],
+    filter: Filter<K, ACC>,
+    /// The FIR's taps.
+    taps: [f32; 5],
+    /// The FIR's last four inputs, newest first.
+    history: [f32; 4],
+    /// The FIR's outputs, run ahead of the sections (a pure function of the inputs: what was
+    /// run ahead and not taken is run again).
+    ahead: [f32; AHEAD],
+}
+
+/// The accelerometer's FIR (direct form) over `block` into `out`, inputs relative to `base`,
+/// from and to `history`: apart from the sections' loop (not inlined), so that its taps and
+/// history take no registers there.
+#[inline(never)]
+fn fir_block<S: Copy + Into<i32>>(
+    taps: &[f32; 5],
+    base: f32,
+    history: &mut [f32; 4],
+    block: &[S],
+    out: &mut [f32; AHEAD],
+) {
+    let mut running = *history;
+    for (a, &s) in out.iter_mut().zip(block) {
+        *a = fir(taps, &mut running, s.into() as f32 - base);
+    }
+    *history = running;
+}
+
+/// The FIR (direct form, the sections' gain in its taps) on the input `x` (relative to the
+/// base), its `history` shifted.
+#[inline(always)]
+fn fir(taps: &[f32; 5], history: &mut [f32; 4], x: f32) -> f32 {
+    let [c0, c1, c2, c3, c4] = *taps;
+    let [h1, h2, h3, h4] = *history;
+    *history = [x, h1, h2, h3];
+    c0 * x + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4
+}
+
+/// The coefficients and the sections' states of a [`Run`].
+struct Filter<const K: usize, const ACC: bool> {
     base: f32,
     gain: f32,
     sections: [Section; K],
     state: [[f32; 2]; K],
-    taps: [f32; 5],
-    history: [f32; 4],
 }
 
-impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Run<'_, S, K, ACC> {
-    /// One sample through the FIR and the sections.
+impl<const K: usize, const ACC: bool> Filter<K, ACC> {
+    /// The sections on the FIR's output `v` (the input relative to the base without one):
+    /// the reconstructed value.
     #[inline(always)]
-    fn equalise(&mut self, raw: i32) -> f32 {
-        let x = raw as f32 - self.base;
-        let [c0, c1, c2, c3, c4] = self.taps;
-        let [f1, f2, f3, f4] = self.history;
-        // The FIR in transposed form: partial sums move, not inputs (the sections' gain is
-        // in its taps).
-        let mut v = if ACC {
-            self.history = [c1 * x + f2, c2 * x + f3, c3 * x + f4, c4 * x];
-            c0 * x + f1
-        } else {
-            x
-        };
+    fn sections(&mut self, mut v: f32) -> f32 {
         for (sec, st) in self.sections.iter().zip(self.state.iter_mut()) {
             v = sec.step(st, v);
         }
@@ -858,23 +899,67 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Run<'_, S, K, ACC> {
             v * self.gain + self.base
         }
     }
+
+    /// `history` after the inputs `taken`.
+    fn history_after<S: Copy + Into<i32>>(&self, mut history: [f32; 4], taken: &[S]) -> [f32; 4] {
+        let newest = taken.len().saturating_sub(4);
+        for &s in taken.get(newest..).unwrap_or(&[]) {
+            let [h1, h2, h3, _] = history;
+            history = [s.into() as f32 - self.base, h1, h2, h3];
+        }
+        history
+    }
 }
 
 impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, K, ACC> {
+    /// The FIR runs ahead over up to [`AHEAD`] samples, then the sections and `f` take them
+    /// (the FIR's history and taps need not stay in registers beside the sections' and the
+    /// caller's; the same arithmetic as [`Pairs::fill`]). Slots past [`AHEAD`] stay unused.
     #[inline(always)]
-    fn each(&mut self, slots: &mut [f32], mut f: impl FnMut(&mut f32, i32, f32) -> bool) -> Fed {
-        let raw = self.raw;
-        let mut count = slots.len().min(raw.len());
+    fn each(
+        &mut self,
+        slots: &mut [f32],
+        raw_max: i32,
+        mut f: impl FnMut(&mut f32, i32, f32) -> bool,
+    ) -> Fed {
+        let Run {
+            raw,
+            filter,
+            taps,
+            history,
+            ahead,
+        } = self;
+        let raw: &[S] = raw;
+        // Run ahead only as far as the slots reach.
+        let block = raw.get(..AHEAD.min(slots.len()).min(raw.len())).unwrap_or(&[]);
+        let mut running = *history;
+        if ACC {
+            fir_block(taps, filter.base, &mut running, block, ahead);
+        }
+        let mut count = slots.len().min(block.len());
         let mut stop = None;
-        for (i, (slot, &s)) in slots.iter_mut().zip(raw.iter()).enumerate() {
+        for (i, ((slot, &s), &a)) in slots.iter_mut().zip(block).zip(ahead.iter()).enumerate() {
             let x: i32 = s.into();
-            let value = self.equalise(x);
+            let value = filter.sections(if ACC { a } else { x as f32 - filter.base });
+            // Two tests, two branches (the saturation test apart from `f`'s).
+            if x >= raw_max {
+                (count, stop) = (i, Some((x, value)));
+                break;
+            }
             if !f(slot, x, value) {
                 (count, stop) = (i, Some((x, value)));
                 break;
             }
         }
-        self.raw = raw.get(count + stop.is_some() as usize..).unwrap_or(&[]);
+        let taken = raw.get(..count + stop.is_some() as usize).unwrap_or(&[]);
+        if ACC {
+            *history = if taken.len() == block.len() {
+                running
+            } else {
+                filter.history_after(*history, taken)
+            };
+        }
+        self.raw = raw.get(taken.len()..).unwrap_or(&[]);
         // Repeated raw samples, counted here once per call rather than in the loop.
         let fed = raw.get(..count).unwrap_or(&[]);
         let repeats = fed
@@ -891,5 +976,19 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, 
             ends: fed.first().zip(fed.last()).map(|(&a, &b)| (a.into(), b.into())),
             repeats,
         }
+    }
+
+    #[inline(always)]
+    fn fill(&mut self, out: &mut [f32]) {
+        let raw = self.raw;
+        let filter = &mut self.filter;
+        let mut history = self.history;
+        for (o, &s) in out.iter_mut().zip(raw) {
+            let x = s.into() as f32 - filter.base;
+            let v = if ACC { fir(&self.taps, &mut history, x) } else { x };
+            *o = filter.sections(v);
+        }
+        self.history = history;
+        self.raw = raw.get(out.len().min(raw.len())..).unwrap_or(&[]);
     }
 }
