@@ -353,21 +353,14 @@ impl EqualiserDesign {
     }
 
     /// `sum h_n^2` of the impulse response (first [`NOISE_TAPS`] samples), from an impulse of
-    /// `2^14` counts after a reference sample of 0 (i16 samples, as a node feeds them, so that
-    /// the image carries one copy of the filter loop).
+    /// `2^14` counts after a reference sample of 0, one [`Equaliser::step`] at a time (so that
+    /// the image carries no other copy of the filter loop).
     fn impulse_energy(&self) -> f32 {
         let mut eq = Equaliser::new(self);
-        let mut out = [0.0f32; 64];
         let mut sum = 0.0f32;
-        for block in 0..NOISE_TAPS / 64 {
-            let mut input = [0i16; 64];
-            if block == 0 {
-                if let Some(x) = input.get_mut(1) {
-                    *x = 1 << 14;
-                }
-            }
-            eq.process(&input, &mut out);
-            sum += out.iter().map(|v| v * v).sum::<f32>();
+        for n in 0..NOISE_TAPS {
+            let v = eq.step(if n == 1 { 1 << 14 } else { 0 });
+            sum += v * v;
         }
         sum / (16384.0 * 16384.0)
     }
@@ -709,9 +702,10 @@ impl Equaliser {
         self.feed_to(raw, Store(out));
     }
 
-    /// Equalises one sample.
-    #[inline]
-    pub fn step<S: Copy + Into<i32>>(&mut self, sample: S) -> f32 {
+    /// Equalises one sample (one copy of the filter loops in an image however many callers
+    /// it has: not inlined).
+    #[inline(never)]
+    pub fn step(&mut self, sample: i32) -> f32 {
         let mut out = [0.0f32];
         self.process(&[sample], &mut out);
         let [value] = out;

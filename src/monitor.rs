@@ -161,8 +161,7 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         let mut rest = samples;
         loop {
             let (quiet, stop) = if self.detector.is_idle() {
-                self.equaliser
-                    .feed_to(rest, QuietLoop(&mut self.detector))
+                quiet_equalised(&mut self.equaliser, &mut self.detector, rest)
             } else {
                 (0, None)
             };
@@ -172,7 +171,7 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
             };
             let value = match stop {
                 Some((_, value)) => value,
-                None => self.equaliser.step(s),
+                None => self.equaliser.step(s.into()),
             };
             if let Some(d) = self.detector.feed_value(s.into(), value) {
                 on_event(self.handle(d));
@@ -263,6 +262,17 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
     pub fn counters(&self) -> &Counters<N> {
         &self.counters
     }
+}
+
+/// The equaliser feeding the detector's quiet loop over `samples` (one copy per sample type
+/// and backend in an image, whatever the caller's event handler: not inlined).
+#[inline(never)]
+fn quiet_equalised<S: Copy + Into<i32>, M: Backend>(
+    equaliser: &mut Equaliser,
+    detector: &mut Detector<M>,
+    samples: &[S],
+) -> (usize, Option<(i32, f32)>) {
+    equaliser.feed_to(samples, QuietLoop(detector))
 }
 
 /// The detector's quiet loop as the equaliser's sink ([`Detector::feed_quiet_pairs`]).
