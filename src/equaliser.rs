@@ -244,9 +244,12 @@ struct Section {
 }
 
 impl Section {
+    /// A section that passes its input through exactly (`g = 0`: `y = v + 0 + 0`), with both
+    /// poles at `z = 0` (`e = [2, 1]`: its states are the last two inputs', always finite):
+    /// the unused slots, and the padding of a loop specialised for more sections.
     const IDENTITY: Section = Section {
         g: [0.0, 0.0],
-        e: [1.0, 1.0],
+        e: [2.0, 1.0],
     };
 
     /// One sample `v` through the section with states `st = [p, q]`: its output (before `k`).
@@ -702,54 +705,64 @@ impl Equaliser {
         self.feed_to(raw, Store(out));
     }
 
-    /// Equalises one sample (one copy of the filter loops in an image however many callers
-    /// it has: not inlined).
-    #[inline(never)]
-    pub fn step(&mut self, sample: i32) -> f32 {
-        let mut out = [0.0f32];
-        self.process(&[sample], &mut out);
-        let [value] = out;
-        value
-    }
-
-    /// Runs `sink` over the equalised `(raw, value)` pairs of `raw`, with the filter
-    /// specialised for the design's section count and stage, its coefficients and states in
-    /// locals (registers) and written back once: the equaliser advances by exactly the
-    /// samples `sink` takes, so a sink that stops early (the detector's quiet loop) leaves it
-    /// where [`Equaliser::process`] on those samples would.
-    #[inline]
-    pub fn feed_to<S: Copy + Into<i32>, T: Sink>(&mut self, raw: &[S], sink: T) -> T::Output {
-        let acc = self.design.taps.is_some();
-        match (self.design.section_count, acc) {
-            (0, false) => self.run::<S, T, 0, false>(raw, sink),
-            (0, true) => self.run::<S, T, 0, true>(raw, sink),
-            (1, false) => self.run::<S, T, 1, false>(raw, sink),
-            (1, true) => self.run::<S, T, 1, true>(raw, sink),
-            (2, false) => self.run::<S, T, 2, false>(raw, sink),
-            (2, true) => self.run::<S, T, 2, true>(raw, sink),
-            (3, false) => self.run::<S, T, 3, false>(raw, sink),
-            (3, true) => self.run::<S, T, 3, true>(raw, sink),
-            (_, false) => self.run::<S, T, 4, false>(raw, sink),
-            (_, true) => self.run::<S, T, 4, true>(raw, sink),
+    /// The input's reference (the first sample seen, `sample` if none was).
+    #[inline(always)]
+    fn base(&mut self, sample: Option<i32>) -> f32 {
+        match (self.offset, sample) {
+            (Some(o), _) => o as f32,
+            (None, Some(first)) => *self.offset.insert(first) as f32,
+            (None, None) => 0.0,
         }
     }
 
-    /// The loop for `K` sections, with or without the accelerometer's FIR: coefficients and
-    /// states in locals so that they stay in registers.
+    /// The FIR's taps: the accelerometer's, or the sections' gain alone (one tap) without it.
     #[inline(always)]
-    fn run<S: Copy + Into<i32>, T: Sink, const K: usize, const ACC: bool>(
+    fn taps(&self) -> [f32; 5] {
+        self.design
+            .taps
+            .map_or([self.design.gain, 0.0, 0.0, 0.0, 0.0], |t| t.c)
+    }
+
+    /// Equalises one sample: the FIR and the design's sections, coefficients read from the
+    /// design (small and not inlined: the path of single samples; the same arithmetic as
+    /// [`Equaliser::feed_to`]'s loops, whose padding sections pass values through exactly).
+    #[inline(never)]
+    pub fn step(&mut self, sample: i32) -> f32 {
+        let base = self.base(Some(sample));
+        let taps = self.taps();
+        let mut v = fir(&taps, &mut self.history, sample as f32 - base);
+        let count = self.design.section_count as usize;
+        for (sec, st) in self.design.sections.iter().zip(&mut self.state).take(count) {
+            v = sec.step(st, v);
+        }
+        v + base
+    }
+
+    /// Runs `sink` over the equalised `(raw, value)` pairs of `raw`, with the filter
+    /// specialised for 2, 3 or 4 sections (fewer are padded with [`Section::IDENTITY`]), its
+    /// coefficients and states in locals (registers) and written back once: the equaliser
+    /// advances by exactly the samples `sink` takes, so a sink that stops early (the
+    /// detector's quiet loop) leaves it where [`Equaliser::step`] on those samples would.
+    #[inline]
+    pub fn feed_to<S: Copy + Into<i32>, T: Sink>(&mut self, raw: &[S], sink: T) -> T::Output {
+        match self.design.section_count {
+            0..=2 => self.run::<S, T, 2>(raw, sink),
+            3 => self.run::<S, T, 3>(raw, sink),
+            _ => self.run::<S, T, 4>(raw, sink),
+        }
+    }
+
+    /// The loop for `K` sections: coefficients and states in locals so that they stay in
+    /// registers.
+    #[inline(always)]
+    fn run<S: Copy + Into<i32>, T: Sink, const K: usize>(
         &mut self,
         raw: &[S],
         sink: T,
     ) -> T::Output {
-        let base = match (self.offset, raw.first()) {
-            (Some(o), _) => o,
-            (None, Some(first)) => *self.offset.insert((*first).into()),
-            (None, None) => 0,
-        } as f32;
-        let filter = Filter::<K, ACC> {
+        let base = self.base(raw.first().map(|&s| s.into()));
+        let filter = Filter::<K> {
             base,
-            gain: self.design.gain,
             sections: core::array::from_fn(|i| {
                 self.design
                     .sections
@@ -759,10 +772,10 @@ impl Equaliser {
             }),
             state: core::array::from_fn(|i| self.state.get(i).copied().unwrap_or([0.0; 2])),
         };
-        let mut run = Run::<S, K, ACC> {
+        let mut run = Run::<S, K> {
             raw,
             filter,
-            taps: self.design.taps.map_or([1.0, 0.0, 0.0, 0.0, 0.0], |t| t.c),
+            taps: self.taps(),
             history: self.history,
             ahead: [0.0; AHEAD],
         };
@@ -831,9 +844,9 @@ impl Sink for Store<'_> {
 const AHEAD: usize = 32;
 
 /// The equaliser over a block, its coefficients and states copied into locals.
-struct Run<'a, S, const K: usize, const ACC: bool> {
+struct Run<'a, S, const K: usize> {
     raw: &'a [S],
-    filter: Filter<K, ACC>,
+    filter: Filter<K>,
     /// The FIR's taps.
     taps: [f32; 5],
     /// The FIR's last four inputs, newest first.
@@ -872,14 +885,13 @@ fn fir(taps: &[f32; 5], history: &mut [f32; 4], x: f32) -> f32 {
 }
 
 /// The coefficients and the sections' states of a [`Run`].
-struct Filter<const K: usize, const ACC: bool> {
+struct Filter<const K: usize> {
     base: f32,
-    gain: f32,
     sections: [Section; K],
     state: [[f32; 2]; K],
 }
 
-impl<const K: usize, const ACC: bool> Filter<K, ACC> {
+impl<const K: usize> Filter<K> {
     /// The sections on the FIR's output `v` (the input relative to the base without one):
     /// the reconstructed value.
     #[inline(always)]
@@ -887,11 +899,7 @@ impl<const K: usize, const ACC: bool> Filter<K, ACC> {
         for (sec, st) in self.sections.iter().zip(self.state.iter_mut()) {
             v = sec.step(st, v);
         }
-        if ACC || K == 0 {
-            v + self.base
-        } else {
-            v * self.gain + self.base
-        }
+        v + self.base
     }
 
     /// `history` after the inputs `taken`.
@@ -905,7 +913,7 @@ impl<const K: usize, const ACC: bool> Filter<K, ACC> {
     }
 }
 
-impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, K, ACC> {
+impl<S: Copy + Into<i32>, const K: usize> Pairs for Run<'_, S, K> {
     /// The FIR runs ahead over up to [`AHEAD`] samples, then the sections and `f` take them
     /// (the FIR's history and taps need not stay in registers beside the sections' and the
     /// caller's; the same arithmetic as [`Pairs::fill`]). Slots past [`AHEAD`] stay unused.
@@ -927,14 +935,12 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, 
         // Run ahead only as far as the slots reach.
         let block = raw.get(..AHEAD.min(slots.len()).min(raw.len())).unwrap_or(&[]);
         let mut running = *history;
-        if ACC {
-            fir_block(taps, filter.base, &mut running, block, ahead);
-        }
+        fir_block(taps, filter.base, &mut running, block, ahead);
         let mut count = slots.len().min(block.len());
         let mut stop = None;
         for (i, ((slot, &s), &a)) in slots.iter_mut().zip(block).zip(ahead.iter()).enumerate() {
             let x: i32 = s.into();
-            let value = filter.sections(if ACC { a } else { x as f32 - filter.base });
+            let value = filter.sections(a);
             // Two tests, two branches (the saturation test apart from `f`'s).
             if x >= raw_max {
                 (count, stop) = (i, Some((x, value)));
@@ -946,13 +952,11 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, 
             }
         }
         let taken = raw.get(..count + stop.is_some() as usize).unwrap_or(&[]);
-        if ACC {
-            *history = if taken.len() == block.len() {
-                running
-            } else {
-                filter.history_after(*history, taken)
-            };
-        }
+        *history = if taken.len() == block.len() {
+            running
+        } else {
+            filter.history_after(*history, taken)
+        };
         self.raw = raw.get(taken.len()..).unwrap_or(&[]);
         // Repeated raw samples, counted here once per call rather than in the loop.
         let fed = raw.get(..count).unwrap_or(&[]);
@@ -979,7 +983,7 @@ impl<S: Copy + Into<i32>, const K: usize, const ACC: bool> Pairs for Run<'_, S, 
         let mut history = self.history;
         for (o, &s) in out.iter_mut().zip(raw) {
             let x = s.into() as f32 - filter.base;
-            let v = if ACC { fir(&self.taps, &mut history, x) } else { x };
+            let v = fir(&self.taps, &mut history, x);
             *o = filter.sections(v);
         }
         self.history = history;
