@@ -511,7 +511,10 @@ impl<M: Backend> Detector<M> {
         let start = self.pre_next;
         let mut next = start;
         let stop = loop {
-            let ring = self.pre.get_mut(next & (PRE_TRIGGER - 1)..).unwrap_or(&mut []);
+            let ring = self
+                .pre
+                .get_mut(next & (PRE_TRIGGER - 1)..)
+                .unwrap_or(&mut []);
             // Few enough samples that no run of repeats among them reaches `limit`: the loop
             // needs no stuck test, the repeats are counted once the samples are fed.
             let room = ring.len().min(limit.saturating_sub(run) as usize);

@@ -933,7 +933,9 @@ impl<S: Copy + Into<i32>, const K: usize> Pairs for Run<'_, S, K> {
         } = self;
         let raw: &[S] = raw;
         // Run ahead only as far as the slots reach.
-        let block = raw.get(..AHEAD.min(slots.len()).min(raw.len())).unwrap_or(&[]);
+        let block = raw
+            .get(..AHEAD.min(slots.len()).min(raw.len()))
+            .unwrap_or(&[]);
         let mut running = *history;
         fir_block(taps, filter.base, &mut running, block, ahead);
         let mut count = slots.len().min(block.len());
@@ -971,7 +973,10 @@ impl<S: Copy + Into<i32>, const K: usize> Pairs for Run<'_, S, K> {
         Fed {
             count,
             stop,
-            ends: fed.first().zip(fed.last()).map(|(&a, &b)| (a.into(), b.into())),
+            ends: fed
+                .first()
+                .zip(fed.last())
+                .map(|(&a, &b)| (a.into(), b.into())),
             repeats,
         }
     }

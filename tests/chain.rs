@@ -252,18 +252,28 @@ fn chains_that_cannot_be_inverted_are_refused_by_stage() {
 }
 
 /// `Monitor::feed` on every sample and `Monitor::feed_slice` on blocks give the same events
-/// behind a chain, through ringing, a saturated impact, noise and a gap.
+/// behind a chain, through ringing, a saturated impact, noise and a gap: three modes and an
+/// accelerometer (the loop specialised for three sections), and chains whose loops are padded
+/// with pass-through sections (one mode alone, the accelerometer alone) against the single
+/// samples' loop over the design's own sections.
 #[test]
 fn feed_and_feed_slice_agree_behind_a_chain() {
+    let three = [
+        mode(180.0, 0.02, 0.1),
+        mode(650.0, 0.01, 0.05),
+        mode(2100.0, 0.02, 0.1),
+    ];
+    for (modes, acc) in [
+        (&three[..], Some((35_000.0, 0.02))),
+        (&three[..1], None),
+        (&[][..], Some((35_000.0, 0.02))),
+    ] {
+        feed_and_feed_slice_agree(dynamics(modes, acc));
+    }
+}
+
+fn feed_and_feed_slice_agree(d: ChainDynamics) {
     use coalshock::{Event, Monitor};
-    let d = dynamics(
-        &[
-            mode(180.0, 0.02, 0.1),
-            mode(650.0, 0.01, 0.05),
-            mode(2100.0, 0.02, 0.1),
-        ],
-        Some((35_000.0, 0.02)),
-    );
     let sensor = SensorChain::from_plate(FS, 50.0, 30.0, 4.0, 16)
         .with_dynamics(d)
         .unwrap();
@@ -291,10 +301,21 @@ fn feed_and_feed_slice_agree_behind_a_chain() {
         at += 1000 + rng.below(2000) as usize;
         k += 1;
     }
-    let samples: Vec<i16> = signal
+    let mut samples: Vec<i16> = signal
         .iter()
         .map(|v| (v + 4.0 * rng.normal()).round().clamp(-32768.0, 32767.0) as i16)
         .collect();
+    // Runs of one repeated sample around the stuck limit (64 repeats) and a long one, in the
+    // quiet stretches after the pulses (each pulse is followed by at least 1000 samples).
+    let mut stuck_starts = Vec::new();
+    for (k, run) in [62usize, 63, 64, 65, 66, 300].into_iter().enumerate() {
+        let start = 40_000 + 2_500 * k;
+        if signal[start..start + run + 1].iter().all(|v| *v == 0.0) {
+            let value = samples[start];
+            samples[start..start + run + 1].fill(value);
+            stuck_starts.push(start);
+        }
+    }
     let (head, tail) = samples.split_at(31_111);
     let mut one = Monitor::new(scene.clone());
     let mut by_one = Vec::new();
@@ -312,7 +333,20 @@ fn feed_and_feed_slice_agree_behind_a_chain() {
         by_one.extend(one.gap(3));
         by_block.extend(blocks.gap(3));
     }
-    println!("{} events on both paths", by_one.len());
+    let stuck = by_one
+        .iter()
+        .filter(|e| matches!(e, Event::Stuck { .. }))
+        .count();
+    println!(
+        "{} events on both paths ({stuck} stuck; {} runs of repeats put in)",
+        by_one.len(),
+        stuck_starts.len()
+    );
+    assert!(
+        stuck >= 1 && stuck_starts.len() >= 4,
+        "{stuck} {}",
+        stuck_starts.len()
+    );
     assert!(by_one.len() >= 10, "{}", by_one.len());
     assert_eq!(by_one, by_block);
     assert_eq!(one.counters(), blocks.counters());
