@@ -471,12 +471,7 @@ impl<M: Backend> Detector<M> {
             next = next.wrapping_add(1);
             n += 1;
         }
-        self.baseline = baseline;
-        self.ring_sum = ms;
-        self.previous = previous;
-        self.same_run = run;
-        self.pre_next = next;
-        self.next_index = self.next_index.wrapping_add(n as u64);
+        self.keep_quiet(baseline, ms, (previous, run), next, n);
         n
     }
 
@@ -521,7 +516,9 @@ impl<M: Backend> Detector<M> {
             let ring = ring.get_mut(..room).unwrap_or(&mut []);
             let fed = pairs.each(ring, adc_max, |slot, _, value| {
                 let v = value - baseline;
-                if !(v.abs() <= trigger) {
+                // Within the trigger level either way (false for NaN).
+                let within = v.abs() <= trigger;
+                if !within {
                     return false;
                 }
                 ms = ring_sum_step(ms, decay, v);
@@ -544,13 +541,27 @@ impl<M: Backend> Detector<M> {
             }
         };
         let n = next.wrapping_sub(start);
+        self.keep_quiet(baseline, ms, (previous, run), next, n);
+        (n, stop)
+    }
+
+    /// What a quiet loop leaves after feeding `n` samples: the baseline, the ring's scaled mean
+    /// square, the last raw sample and its repeats, the pre-trigger ring's next slot.
+    #[inline(always)]
+    fn keep_quiet(
+        &mut self,
+        baseline: f32,
+        ring_sum: f32,
+        (previous, run): (i32, u16),
+        pre_next: usize,
+        n: usize,
+    ) {
         self.baseline = baseline;
-        self.ring_sum = ms;
+        self.ring_sum = ring_sum;
         self.previous = previous;
         self.same_run = run;
-        self.pre_next = next;
+        self.pre_next = pre_next;
         self.next_index = self.next_index.wrapping_add(n as u64);
-        (n, stop)
     }
 
     /// Tells the detector that `lost` samples were dropped (e.g. a FIFO overrun). A pulse in

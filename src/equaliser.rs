@@ -28,7 +28,9 @@
 //! inverting an exact first-order-hold model was 5-50 times less accurate on the forced pulse
 //! (its extra zero) in the prototype. The forced pulse is reconstructed to 1e-3 of its peak
 //! down to 4 samples per pulse (`tests/equaliser.rs` checks it against host-sim's exact
-//! chain). Memory: five coefficients and two states per mode.
+//! chain). Memory: four coefficients and two states per mode; the sections' gains `k` are
+//! linear factors, applied once in front of them (in the accelerometer's taps, or as a tap of
+//! their own).
 //!
 //! **Accelerometer.** Its roll-off cannot be inverted past the sampled band (the exact inverse
 //! `1 + (2 zeta_a / w_a) s + s^2 / w_a^2` is improper and its noise grows as `f^2`): it is
@@ -663,7 +665,10 @@ fn matched_section<M: Backend>(m: &BeamMode, zero: C, t: f32) -> (Section, f32) 
 }
 
 /// The equaliser's state: fed raw samples, it gives the reconstructed force in counts of the
-/// rigid plate (see the module docs). Fixed size; `O(modes)` work per sample.
+/// rigid plate (see the module docs). Fixed size; `O(modes)` work per sample: the FIR, then
+/// the sections. [`Equaliser::step`] takes one sample; [`Equaliser::feed_to`] runs loops
+/// specialised for the section count over a block (how the detector's quiet loop is fed,
+/// see [`crate::Monitor::feed_slice`]), with the same arithmetic.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Equaliser {
@@ -892,8 +897,7 @@ struct Filter<const K: usize> {
 }
 
 impl<const K: usize> Filter<K> {
-    /// The sections on the FIR's output `v` (the input relative to the base without one):
-    /// the reconstructed value.
+    /// The sections on the FIR's output `v`, the base added back: the reconstructed value.
     #[inline(always)]
     fn sections(&mut self, mut v: f32) -> f32 {
         for (sec, st) in self.sections.iter().zip(self.state.iter_mut()) {

@@ -32,7 +32,6 @@ fn main() {
         &root.join("fw/data/paper_stream"),
         &coalshock_replay::PAPER,
         scene,
-        true,
     );
 
     let chain = coalshock_replay::build_chain_scene::<DefaultBackend>()
@@ -43,7 +42,6 @@ fn main() {
         &root.join("fw/data/chain_stream"),
         &coalshock_replay::CHAIN,
         chain,
-        false,
     );
 }
 
@@ -69,14 +67,12 @@ fn same_as_file(node: &Scene<DEFAULT_CLASSES, DefaultBackend>, file: &std::path:
 /// `Monitor::feed_slice`, `Monitor::gap` at every recorded gap, `Monitor::finish`), and the
 /// node's lines are printed after `prefix`. `node_stream` is the node's compiled-in copy.
 /// The same stream fed one `Monitor::feed` per sample must give the same events; when it does
-/// not, a `feed_check` line says where they part, and with `strict` the run fails. (On the
-/// chain stream they part after its saturated impact: reported, not failed; see fw/README.md.)
+/// not, a `feed_check` line says where they part and the run fails.
 fn replay(
     prefix: &str,
     stem: &std::path::Path,
     node_stream: &Stream,
     scene: Scene<DEFAULT_CLASSES, DefaultBackend>,
-    strict: bool,
 ) {
     let stream = read_stream(stem).unwrap_or_else(|e| fail(format!("stream {e}")));
     // The node's copy of the stream (compiled in) must be what host-sim reads.
@@ -124,9 +120,7 @@ fn replay(
             node_events.len(),
             events.len()
         );
-        if strict {
-            fail("replay: one feed per sample and feed_slice blocks give different events".into());
-        }
+        fail("replay: one feed per sample and feed_slice blocks give different events".into());
     }
     let classes: &[ParticleClass] = monitor.scene().classes();
     for (n, e) in events.iter().enumerate() {
