@@ -744,15 +744,14 @@ impl Equaliser {
     }
 
     /// Runs `sink` over the equalised `(raw, value)` pairs of `raw`, with the filter
-    /// specialised for 2, 3 or 4 sections (fewer are padded with [`Section::IDENTITY`]), its
+    /// specialised for 3 or 4 sections (fewer are padded with [`Section::IDENTITY`]), its
     /// coefficients and states in locals (registers) and written back once: the equaliser
     /// advances by exactly the samples `sink` takes, so a sink that stops early (the
     /// detector's quiet loop) leaves it where [`Equaliser::step`] on those samples would.
     #[inline]
     pub fn feed_to<S: Copy + Into<i32>, T: Sink>(&mut self, raw: &[S], sink: T) -> T::Output {
         match self.design.section_count {
-            0..=2 => self.run::<S, T, 2>(raw, sink),
-            3 => self.run::<S, T, 3>(raw, sink),
+            0..=3 => self.run::<S, T, 3>(raw, sink),
             _ => self.run::<S, T, 4>(raw, sink),
         }
     }
