@@ -297,6 +297,8 @@ fn mv(k: usize, tol: ChainTolerance) -> (f32, f32, f32) {
 
 /// The bound of `|d ln F_max|` for one pulse duration `t_c` (s): the module's integral for
 /// every stage and move, summed over parameters.
+// Not inlined: a rigid scene's build never calls it and must not carry its frame.
+#[inline(never)]
 fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
     let tol = d.tolerance();
     let v_top = (core::f32::consts::PI * sample_rate_hz * t_c).min(MAX_V);
