@@ -58,6 +58,7 @@ use crate::convert::{ConvertError, scene_to_kernel_in};
 use crate::cusum::{Cusum, MixtureModel, NaiveRule, increment, label_increment, median_p90};
 use crate::evaluate::class_models;
 use crate::scene::{SceneError, SceneFile, SpeedSpec};
+use crate::par::map_ordered;
 use crate::stream::{PlannedImpact, StreamError, StreamOptions, generate_planned, replay_events};
 
 /// False-alarm settings of the delay-against-false-alarm curve (alarms per impact).
@@ -821,7 +822,7 @@ fn information(rounds: &[Round], mixture: &MixtureModel, opts: &CavingOptions) -
 }
 
 /// Runs the caving rounds (see the module docs).
-pub fn run<M: Backend>(
+pub fn run<M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &CavingOptions,
 ) -> Result<CavingReport, CavingError> {
@@ -833,7 +834,7 @@ pub fn run<M: Backend>(
     }
 }
 
-fn run_n<const N: usize, M: Backend>(
+fn run_n<const N: usize, M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &CavingOptions,
 ) -> Result<CavingReport, CavingError> {
@@ -843,9 +844,17 @@ fn run_n<const N: usize, M: Backend>(
         models: class_models(scene),
         gangue,
     };
-    let rounds = (0..opts.rounds)
-        .map(|r| simulate_round(scene, &kernel, opts, &mixture, r))
-        .collect::<Result<Vec<_>, _>>()?;
+    // Every round has its own seeds: simulated on every core, taken in order.
+    let round_ids: Vec<usize> = (0..opts.rounds).collect();
+    let mut rounds = Vec::with_capacity(opts.rounds);
+    map_ordered(
+        &round_ids,
+        |_, &r| simulate_round(scene, &kernel, opts, &mixture, r),
+        |_, round| {
+            rounds.push(round?);
+            Ok::<(), CavingError>(())
+        },
+    )?;
     let alpha = opts.false_alarm_rate;
     let flow_for = |a: f64| {
         FlowMonitor::<M>::new(opts.flow_config(&mixture.gangue, a), &kernel)

@@ -22,6 +22,7 @@ pub mod law_spec;
 pub mod laws;
 pub mod mismatch;
 pub mod paper;
+pub mod par;
 pub mod plasticity;
 pub mod saturation;
 pub mod scene;
