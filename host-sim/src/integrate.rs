@@ -301,10 +301,16 @@ impl ContactSolution {
         }
         let n = n as usize;
         let mut out = Vec::with_capacity(n + 1);
+        // The times only move forward: each segment is found by walking, not searching; the
+        // values are those of `force_at` bit for bit.
+        let mut cursor = 0usize;
         for i in 0..=n {
             let t = i as f64 * interval_s;
-            if let Some(f) = self.force_at(t) {
-                out.push((t, f));
+            let tau = t / self.scales.time_s;
+            if let Some((j, theta)) = find_segment_walk(&self.segments, tau, &mut cursor) {
+                let y = self.segments[j].eval(theta);
+                let (d, dd) = (y[0] * self.scales.delta_m, y[1] * self.scales.speed_m_s);
+                out.push((t, self.law.force(d, dd)));
             }
         }
         Ok(out)
@@ -332,19 +338,43 @@ fn law_at<'a>(first: &'a ForceLaw, turned: Option<&'a (f64, ForceLaw)>, tau: f64
     }
 }
 
+/// The segment holding `tau` (the last one starting at or before it, or the first) and the
+/// step fraction there, or `None` outside `[0, end of the last segment]`; binary search.
 fn find_segment(segments: &[Segment], tau: f64) -> Option<(usize, f64)> {
     let last = segments.last()?;
     if !(tau >= 0.0 && tau <= last.t0 + last.h) {
         return None;
     }
     let i = segments.partition_point(|s| s.t0 <= tau).saturating_sub(1);
-    let s = &segments[i];
-    let theta = if s.h > 0.0 {
+    Some((i, step_fraction(&segments[i], tau)))
+}
+
+/// [`find_segment`] for increasing `tau`: walks forward from `cursor` (the index found by the
+/// previous call, 0 at first) instead of searching; the same result for any `tau` (a step
+/// back in time searches afresh).
+fn find_segment_walk(segments: &[Segment], tau: f64, cursor: &mut usize) -> Option<(usize, f64)> {
+    let last = segments.last()?;
+    if !(tau >= 0.0 && tau <= last.t0 + last.h) {
+        return None;
+    }
+    let mut i = (*cursor).min(segments.len() - 1);
+    if segments[i].t0 > tau {
+        i = segments.partition_point(|s| s.t0 <= tau).saturating_sub(1);
+    }
+    while i + 1 < segments.len() && segments[i + 1].t0 <= tau {
+        i += 1;
+    }
+    *cursor = i;
+    Some((i, step_fraction(&segments[i], tau)))
+}
+
+/// `theta = (tau - t0) / h` clamped to [0, 1] (0 for an empty segment).
+fn step_fraction(s: &Segment, tau: f64) -> f64 {
+    if s.h > 0.0 {
         ((tau - s.t0) / s.h).clamp(0.0, 1.0)
     } else {
         0.0
-    };
-    Some((i, theta))
+    }
 }
 
 fn eval_segments(segments: &[Segment], tau: f64) -> Option<[f64; 2]> {
