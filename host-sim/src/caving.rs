@@ -57,8 +57,8 @@ use crate::bayes::ClassModel;
 use crate::convert::{ConvertError, scene_to_kernel_in};
 use crate::cusum::{Cusum, MixtureModel, NaiveRule, increment, label_increment, median_p90};
 use crate::evaluate::class_models;
-use crate::scene::{SceneError, SceneFile, SpeedSpec};
 use crate::par::map_ordered;
+use crate::scene::{SceneError, SceneFile, SpeedSpec};
 use crate::stream::{PlannedImpact, StreamError, StreamOptions, generate_planned, replay_events};
 
 /// False-alarm settings of the delay-against-false-alarm curve (alarms per impact).

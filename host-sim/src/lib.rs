@@ -28,6 +28,7 @@ pub mod saturation;
 pub mod scene;
 pub mod sensor;
 pub mod sim_error;
+pub mod speed;
 pub mod stream;
 pub mod thornton;
 pub mod tradeoff;

@@ -76,7 +76,12 @@ fn pulse_train() -> ForceTrack {
                 scale: if i % 7 == 0 { 3.0 } else { 1.0 },
                 shape: PulseShape::Series {
                     step_s,
-                    force_n: r.force_series.expect("recorded").iter().map(|p| p.1).collect(),
+                    force_n: r
+                        .force_series
+                        .expect("recorded")
+                        .iter()
+                        .map(|p| p.1)
+                        .collect(),
                 },
             }
         };
@@ -108,9 +113,16 @@ fn sensor_walk_equals_search_bit_for_bit() {
             .filter(|(a, b)| a.to_bits() != b.to_bits())
             .count();
         assert_eq!(differ, 0, "{name}: {differ} of {n} samples differ");
-        assert!(walked.iter().filter(|v| **v != 0.0).count() > 1000, "{name}");
+        assert!(
+            walked.iter().filter(|v| **v != 0.0).count() > 1000,
+            "{name}"
+        );
         let codes = sensor.sample(&track, n, phase_s, 11);
-        assert_eq!(codes, sensor.sample(&Searching(&track), n, phase_s, 11), "{name}");
+        assert_eq!(
+            codes,
+            sensor.sample(&Searching(&track), n, phase_s, 11),
+            "{name}"
+        );
     }
 }
 
@@ -129,13 +141,9 @@ fn force_series_walk_equals_force_at_bit_for_bit() {
         speed_m_s: hertz.speed_m_s,
         gravity_m_s2: 0.0,
     };
-    let sol = host_sim::integrate::integrate_contact(
-        &problem,
-        spec.method,
-        spec.tolerance,
-        &spec.limits,
-    )
-    .expect("integrates");
+    let sol =
+        host_sim::integrate::integrate_contact(&problem, spec.method, spec.tolerance, &spec.limits)
+            .expect("integrates");
     let dt = sol.duration_s / 777.0;
     let series = sol.sample_force(dt).expect("a series");
     assert!(series.len() >= 777);
