@@ -12,6 +12,8 @@
 //! (`rate_hz` impacts per s; impacts that start while the previous one is on are pile-ups,
 //! which the kernel rejects). The stream ([`crate::stream::generate_planned`]) is replayed
 //! through `Monitor::with_flow`; each pulse is placed at the impact whose peak it reports.
+//! Every round has its own seeds; the rounds are simulated on every core and taken in order
+//! ([`crate::par`]), so the report does not depend on the number of threads.
 //!
 //! # Detectors, all at the false-alarm setting `alpha` (threshold `h = ln(1 / alpha)`)
 //!

@@ -1,12 +1,15 @@
 //! Speed figures of host-sim measured in one run on the machine it runs on (`host-sim speed`):
 //! the contact integrator's impacts per second on the paper's impact (undamped Hertz and
-//! Adams IMPACT with e = 0.5, d = 0.01 mm; Dormand-Prince at the default tolerance, one
-//! thread), and the wall time of an end-to-end evaluation (`evaluate`: integrator, sensor
-//! chain, kernel, scoring) of N impacts of a scene on every core and, optionally, on one.
+//! Adams IMPACT with e = 0.5, d = 0.01 mm, c_max from the restitution; one thread) for every
+//! method and tolerance of the criterion bench's ladder, with its errors and work, and the
+//! wall time of an end-to-end evaluation (`evaluate`: integrator, sensor chain, kernel,
+//! scoring) of N impacts of a scene on every core and, optionally, on one.
 //!
-//! Integrator throughput is the best of repeated batches of 200 integrations over the
-//! measuring time (the least disturbed batch on a shared machine); the evaluation is timed
-//! once. Ratios between figures of one run are what carries over between machines.
+//! Errors are relative to the Hertz closed forms (undamped) and to Dormand-Prince at
+//! rtol = atol = 1e-13 (Adams), as in `benches/integrator.rs`. Integrator throughput is the
+//! best of repeated batches of 100 integrations over the measuring time (the least disturbed
+//! batch on a shared machine); the evaluation is timed once. Ratios between figures of one run
+//! are what carries over between machines.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -16,8 +19,8 @@ use coalshock::math::DefaultBackend;
 use serde::Serialize;
 
 use crate::evaluate::{EvalOptions, evaluate};
-use crate::integrate::{ContactProblem, Tolerance};
-use crate::integrator_cases::{MethodCase, paper_problems};
+use crate::integrate::ContactProblem;
+use crate::integrator_cases::{MethodCase, bench_ladder, paper_problems, relative_errors};
 use crate::scene::{self, SceneFile};
 
 /// Flags of `host-sim speed`.
@@ -30,8 +33,8 @@ pub struct SpeedArgs {
     /// `scenes/paper.toml`).
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Measuring time of the integrator per law in s.
-    #[arg(long, default_value_t = 2.0)]
+    /// Measuring time of the integrator per law and method in s.
+    #[arg(long, default_value_t = 0.5)]
     pub integrator_seconds: f64,
     /// Also time the evaluation on one thread (the parallel speed-up).
     #[arg(long)]
@@ -50,8 +53,16 @@ pub struct IntegratorSpeed {
     pub method: String,
     /// Integrations per second of one thread (best batch).
     pub impacts_per_s: f64,
+    /// Relative error of the peak force against the reference.
+    pub rel_err_peak_force: f64,
+    /// Relative error of the contact duration against the reference.
+    pub rel_err_duration: f64,
     /// Force-law evaluations per integration.
     pub force_evals: usize,
+    /// Accepted steps per integration.
+    pub steps: usize,
+    /// Rejected steps per integration.
+    pub rejected_steps: usize,
 }
 
 /// Wall time of one evaluation.
@@ -78,15 +89,18 @@ pub struct SpeedReport {
     pub evaluate: Vec<EvaluateSpeed>,
 }
 
-/// Integrations per second of `case` on `problem`: the best of batches of 200 over `seconds`.
+/// Integrations per second of `case` on `problem` (the best of batches of 100 over
+/// `seconds`), errors against `reference` (`F_max` in N, `t_c` in s) and work.
 fn integrator_speed(
     law: &'static str,
     case: &MethodCase,
     problem: &ContactProblem,
+    reference: (f64, f64),
     seconds: f64,
 ) -> Result<IntegratorSpeed> {
-    const BATCH: usize = 200;
-    let force_evals = case.solve(problem)?.work.force_evals;
+    const BATCH: usize = 100;
+    let sol = case.solve(problem)?;
+    let (rel_err_peak_force, rel_err_duration) = relative_errors(&sol, reference.0, reference.1);
     let start = Instant::now();
     let mut best = f64::INFINITY;
     while best.is_infinite() || start.elapsed().as_secs_f64() < seconds {
@@ -100,7 +114,11 @@ fn integrator_speed(
         law,
         method: case.label.clone(),
         impacts_per_s: 1.0 / best,
-        force_evals,
+        rel_err_peak_force,
+        rel_err_duration,
+        force_evals: sol.work.force_evals,
+        steps: sol.work.steps,
+        rejected_steps: sol.work.rejected_steps,
     })
 }
 
@@ -153,11 +171,26 @@ pub fn measure(args: &SpeedArgs) -> Result<SpeedReport> {
         None => SceneFile::paper(),
     };
     let p = paper_problems()?;
-    let case = MethodCase::dopri5(Tolerance::default().rtol);
-    let integrator = vec![
-        integrator_speed("Hertz", &case, &p.undamped, args.integrator_seconds)?,
-        integrator_speed("Adams e = 0.5", &case, &p.adams, args.integrator_seconds)?,
+    let adams_ref = MethodCase::dopri5(1e-13).solve(&p.adams)?;
+    let laws = [
+        (
+            "Hertz",
+            &p.undamped,
+            (p.hertz.peak_force_n, p.hertz.duration_s),
+        ),
+        (
+            "Adams e = 0.5",
+            &p.adams,
+            (adams_ref.peak_force_n, adams_ref.duration_s),
+        ),
     ];
+    let mut integrator = Vec::new();
+    for (law, problem, reference) in laws {
+        for case in bench_ladder() {
+            let secs = args.integrator_seconds;
+            integrator.push(integrator_speed(law, &case, problem, reference, secs)?);
+        }
+    }
     let mut evaluate = vec![evaluate_speed(&scene, args.impacts, None)?];
     if args.one_thread {
         evaluate.push(evaluate_speed(&scene, args.impacts, Some(1))?);
@@ -172,12 +205,20 @@ pub fn measure(args: &SpeedArgs) -> Result<SpeedReport> {
 /// The report as markdown tables.
 pub fn render(r: &SpeedReport) -> String {
     let mut s = String::from(
-        "| law | method | impacts/s (one thread) | force evals / impact |\n| --- | --- | --- | --- |\n",
+        "| law | method | impacts/s (one thread) | rel. err F_max | rel. err t_c | force evals \
+         / impact | steps | rejected |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n",
     );
     for i in &r.integrator {
         s += &format!(
-            "| {} | {} | {:.0} | {} |\n",
-            i.law, i.method, i.impacts_per_s, i.force_evals
+            "| {} | {} | {:.0} | {:.1e} | {:.1e} | {} | {} | {} |\n",
+            i.law,
+            i.method,
+            i.impacts_per_s,
+            i.rel_err_peak_force,
+            i.rel_err_duration,
+            i.force_evals,
+            i.steps,
+            i.rejected_steps
         );
     }
     s += &format!(
