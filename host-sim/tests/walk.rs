@@ -128,28 +128,46 @@ fn sensor_walk_equals_search_bit_for_bit() {
 
 #[test]
 fn force_series_walk_equals_force_at_bit_for_bit() {
-    let mut spec = ImpactSpec::paper_scene();
-    spec.law = LawSpec::AdamsRestitution {
-        restitution: 0.5,
-        d_m: 1e-5,
-    };
-    let hertz = spec.hertz().expect("a valid impact");
-    let law = spec.law.build(&hertz).expect("a law");
-    let problem = host_sim::integrate::ContactProblem {
-        law,
-        mass_kg: hertz.mass_kg,
-        speed_m_s: hertz.speed_m_s,
-        gravity_m_s2: 0.0,
-    };
-    let sol =
-        host_sim::integrate::integrate_contact(&problem, spec.method, spec.tolerance, &spec.limits)
-            .expect("integrates");
-    let dt = sol.duration_s / 777.0;
-    let series = sol.sample_force(dt).expect("a series");
-    assert!(series.len() >= 777);
-    for (i, &(t, f)) in series.iter().enumerate() {
-        assert_eq!(t, i as f64 * dt);
-        let want = sol.force_at(t).expect("inside the contact");
-        assert_eq!(f.to_bits(), want.to_bits(), "point {i} at {t} s");
+    // A clamped law with a kink, and a history-dependent one (Thornton's plastic contact turns
+    // to its elastic unloading at the largest penetration).
+    let laws = [
+        LawSpec::AdamsRestitution {
+            restitution: 0.5,
+            d_m: 1e-5,
+        },
+        LawSpec::Thornton {
+            yield_pressure_pa: 1e8,
+            damping: None,
+        },
+    ];
+    for spec_law in laws {
+        let mut spec = ImpactSpec::paper_scene();
+        spec.law = spec_law;
+        let hertz = spec.hertz().expect("a valid impact");
+        let law = spec.law.build(&hertz).expect("a law");
+        let problem = host_sim::integrate::ContactProblem {
+            law,
+            mass_kg: hertz.mass_kg,
+            speed_m_s: hertz.speed_m_s,
+            gravity_m_s2: 0.0,
+        };
+        let sol = host_sim::integrate::integrate_contact(
+            &problem,
+            spec.method,
+            spec.tolerance,
+            &spec.limits,
+        )
+        .expect("integrates");
+        if let LawSpec::Thornton { .. } = spec.law {
+            assert!(sol.turned().is_some(), "the plastic contact turns");
+        }
+        let dt = sol.duration_s / 777.0;
+        let series = sol.sample_force(dt).expect("a series");
+        assert!(series.len() >= 777);
+        for (i, &(t, f)) in series.iter().enumerate() {
+            assert_eq!(t, i as f64 * dt);
+            let want = sol.force_at(t).expect("inside the contact");
+            assert_eq!(f.to_bits(), want.to_bits(), "{:?}: point {i} at {t} s", spec.law);
+        }
     }
 }
