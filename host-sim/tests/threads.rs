@@ -2,12 +2,13 @@
 //! and `caving` run on a pool of 1 thread and of 2 threads must agree bit for bit (every field
 //! but the measured kernel time).
 
-use std::path::Path;
+mod common;
 
 use coalshock::math::DefaultBackend;
+use common::shipped_scene;
 use host_sim::caving::{CavingOptions, run as run_caving};
 use host_sim::evaluate::{EvalOptions, evaluate};
-use host_sim::scene::{self, SceneFile};
+use host_sim::scene::SceneFile;
 use host_sim::stream::{PulseModel, StreamOptions, generate};
 
 /// Runs `f` on a pool of `threads` threads.
@@ -17,14 +18,6 @@ fn on_pool<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
         .build()
         .expect("a thread pool")
         .install(f)
-}
-
-fn scene_file(name: &str) -> SceneFile {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("scenes")
-        .join(name);
-    scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// The evaluation as JSON without the two wall-time fields.
@@ -49,7 +42,7 @@ fn evaluation_json(scene: &SceneFile, threads: usize) -> serde_json::Value {
 fn evaluate_is_the_same_on_one_and_two_threads() {
     // The rigid chain and one with beam modes and an accelerometer.
     for name in ["paper.toml", "piezo_chain.toml"] {
-        let scene = scene_file(name);
+        let scene = shipped_scene(name);
         let one = evaluation_json(&scene, 1);
         let two = evaluation_json(&scene, 2);
         assert_eq!(one, two, "{name}");
@@ -59,7 +52,7 @@ fn evaluate_is_the_same_on_one_and_two_threads() {
 
 #[test]
 fn stream_is_the_same_on_one_and_two_threads() {
-    let scene = scene_file("paper_adams.toml");
+    let scene = shipped_scene("paper_adams.toml");
     let opts = StreamOptions {
         pulse_model: PulseModel::Integrator,
         pileup_share: 0.2,

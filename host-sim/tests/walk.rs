@@ -4,13 +4,14 @@
 //! output. The searching path is the signal's own `force_n` / `is_zero_on` (binary search over
 //! every pulse) and the solution's `force_at` (binary search over every step).
 
-use std::path::Path;
+mod common;
 
+use common::shipped_scene;
 use host_sim::hertz64::Material64;
 use host_sim::impact::{ImpactSpec, simulate};
 use host_sim::law_spec::LawSpec;
-use host_sim::scene::{self, SceneFile};
 use host_sim::sensor::{ForcePulse, ForceSignal, ForceTrack, PulseShape, Sensor};
+use host_sim::stream::hertz_sine_pulse;
 
 /// A signal that only searches: the walking calls fall back to `force_n` and `is_zero_on`.
 struct Searching<'a>(&'a ForceTrack);
@@ -23,14 +24,6 @@ impl ForceSignal for Searching<'_> {
     fn is_zero_on(&self, t0_s: f64, t1_s: f64) -> bool {
         self.0.is_zero_on(t0_s, t1_s)
     }
-}
-
-fn scene_file(name: &str) -> SceneFile {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("scenes")
-        .join(name);
-    scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 /// 120 pulses as a stream lays them out: integrated Adams pulses recorded at 512 points and
@@ -54,14 +47,7 @@ fn pulse_train() -> ForceTrack {
             _ => t,
         };
         let pulse = if i % 3 == 0 {
-            ForcePulse {
-                start_s,
-                duration_s: hertz.duration_s,
-                scale: 1.0,
-                shape: PulseShape::HertzSine {
-                    peak_force_n: hertz.peak_force_n,
-                },
-            }
+            hertz_sine_pulse(&hertz, start_s)
         } else {
             spec.law = LawSpec::AdamsRestitution {
                 restitution: 0.5,
@@ -100,7 +86,7 @@ fn sensor_walk_equals_search_bit_for_bit() {
         .map(|p| p.start_s + p.duration_s)
         .fold(0.0, f64::max);
     for name in ["paper.toml", "piezo_chain.toml"] {
-        let sensor = Sensor::new(&scene_file(name).sensor).expect("a chain");
+        let sensor = Sensor::new(&shipped_scene(name).sensor).expect("a chain");
         let fs = sensor.sample_rate_hz();
         let n = (end_s * fs).ceil() as usize + 100;
         let phase_s = 0.37 / fs;
@@ -167,7 +153,12 @@ fn force_series_walk_equals_force_at_bit_for_bit() {
         for (i, &(t, f)) in series.iter().enumerate() {
             assert_eq!(t, i as f64 * dt);
             let want = sol.force_at(t).expect("inside the contact");
-            assert_eq!(f.to_bits(), want.to_bits(), "{:?}: point {i} at {t} s", spec.law);
+            assert_eq!(
+                f.to_bits(),
+                want.to_bits(),
+                "{:?}: point {i} at {t} s",
+                spec.law
+            );
         }
     }
 }
