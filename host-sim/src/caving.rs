@@ -12,6 +12,8 @@
 //! (`rate_hz` impacts per s; impacts that start while the previous one is on are pile-ups,
 //! which the kernel rejects). The stream ([`crate::stream::generate_planned`]) is replayed
 //! through `Monitor::with_flow`; each pulse is placed at the impact whose peak it reports.
+//! Every round has its own seeds; the rounds are simulated on every core and taken in order
+//! ([`crate::par`]), so the report does not depend on the number of threads.
 //!
 //! # Detectors, all at the false-alarm setting `alpha` (threshold `h = ln(1 / alpha)`)
 //!
@@ -57,6 +59,7 @@ use crate::bayes::ClassModel;
 use crate::convert::{ConvertError, scene_to_kernel_in};
 use crate::cusum::{Cusum, MixtureModel, NaiveRule, increment, label_increment, median_p90};
 use crate::evaluate::class_models;
+use crate::par::map_ordered;
 use crate::scene::{SceneError, SceneFile, SpeedSpec};
 use crate::stream::{PlannedImpact, StreamError, StreamOptions, generate_planned, replay_events};
 
@@ -821,7 +824,7 @@ fn information(rounds: &[Round], mixture: &MixtureModel, opts: &CavingOptions) -
 }
 
 /// Runs the caving rounds (see the module docs).
-pub fn run<M: Backend>(
+pub fn run<M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &CavingOptions,
 ) -> Result<CavingReport, CavingError> {
@@ -833,7 +836,7 @@ pub fn run<M: Backend>(
     }
 }
 
-fn run_n<const N: usize, M: Backend>(
+fn run_n<const N: usize, M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &CavingOptions,
 ) -> Result<CavingReport, CavingError> {
@@ -843,9 +846,17 @@ fn run_n<const N: usize, M: Backend>(
         models: class_models(scene),
         gangue,
     };
-    let rounds = (0..opts.rounds)
-        .map(|r| simulate_round(scene, &kernel, opts, &mixture, r))
-        .collect::<Result<Vec<_>, _>>()?;
+    // Every round has its own seeds: simulated on every core, taken in order.
+    let round_ids: Vec<usize> = (0..opts.rounds).collect();
+    let mut rounds = Vec::with_capacity(opts.rounds);
+    map_ordered(
+        &round_ids,
+        |_, &r| simulate_round(scene, &kernel, opts, &mixture, r),
+        |_, round| {
+            rounds.push(round?);
+            Ok::<(), CavingError>(())
+        },
+    )?;
     let alpha = opts.false_alarm_rate;
     let flow_for = |a: f64| {
         FlowMonitor::<M>::new(opts.flow_config(&mixture.gangue, a), &kernel)

@@ -11,8 +11,9 @@
 //! `impacts_per_stream` impacts of one class each ([`crate::stream::generate_class`]: the
 //! scene's contact law through the integrator, the sensor chain, well-separated impacts with
 //! 2-10 ms of quiet between pulses, no injected faults), and stream `j` of class `c` has its
-//! own seed derived from `(seed, c, j)`. Everything runs on one thread, in a fixed order: one
-//! seed gives one result on every machine. Each stream is replayed through a fresh `Monitor`
+//! own seed derived from `(seed, c, j)`. The streams are simulated and replayed on every core
+//! and folded in their fixed order ([`crate::par`]): one seed gives one result on every
+//! machine, whatever the number of threads. Each stream is replayed through a fresh `Monitor`
 //! ([`crate::stream::replay_events`]) and its reports are paired with the impacts
 //! ([`crate::stream::match_truth`], nearest peak first, at most one longest contact time
 //! apart).
@@ -62,7 +63,8 @@
 //!   independent-noise likelihood, `model_sigma`, `f32`) and its rejections cost.
 //!
 //! `kernel_seconds` is the wall time spent in the kernel's feed calls
-//! (`Monitor::feed_slice`, `gap`, `finish`), measured with `std::time::Instant`; it and
+//! (`Monitor::feed_slice`, `gap`, `finish`), measured with `std::time::Instant` and summed
+//! over the streams (over all threads, so it can exceed the run's wall time); it and
 //! `kernel_ns_per_sample` are the only fields that differ between two runs of one seed.
 
 use std::collections::BTreeMap;
@@ -83,6 +85,7 @@ use crate::convert::{
 };
 use crate::hertz64::{HertzImpact64, effective_modulus_pa};
 use crate::mismatch::ChainMismatch;
+use crate::par::map_ordered;
 use crate::scene::{SceneError, SceneFile, SpeedSpec};
 use crate::stream::{StreamError, StreamOptions, generate_class, match_truth, replay_events};
 
@@ -466,7 +469,7 @@ pub fn evaluate_backend(
 }
 
 /// Evaluates the kernel with math backend `M` on `scene` (see the module docs).
-pub fn evaluate<M: Backend>(
+pub fn evaluate<M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &EvalOptions,
 ) -> Result<Evaluation, EvalError> {
@@ -474,7 +477,7 @@ pub fn evaluate<M: Backend>(
 }
 
 /// [`evaluate`], calling `progress(done, total)` with the impacts simulated and fed so far.
-pub fn evaluate_with_progress<M: Backend>(
+pub fn evaluate_with_progress<M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &EvalOptions,
     progress: &mut dyn FnMut(usize, usize),
@@ -558,7 +561,7 @@ pub fn class_models(scene: &SceneFile) -> Vec<ClassModel> {
         .collect()
 }
 
-fn run<const N: usize, M: Backend>(
+fn run<const N: usize, M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &EvalOptions,
     progress: &mut dyn FnMut(usize, usize),
@@ -615,79 +618,34 @@ fn run<const N: usize, M: Backend>(
     let (mut samples_fed, mut pulses_detected, mut spurious) = (0u64, 0u64, 0u64);
     let mut kernel_seconds = 0.0f64;
     let mut done = 0usize;
-    for (class, model) in models.iter().enumerate() {
-        let mut left = opts.n_per_class;
-        let mut chunk = 0usize;
+    // Every stream has its own seed: simulated and replayed on every core, folded in order.
+    let mut jobs: Vec<StreamJob> = Vec::new();
+    for class in 0..k {
+        let (mut left, mut chunk) = (opts.n_per_class, 0);
         while left > 0 {
             let n = left.min(opts.impacts_per_stream);
-            let stream = generate_class(
-                scene,
-                class,
-                n,
-                stream_seed(opts.seed, class, chunk),
-                &opts.stream,
-            )?;
-            let mut monitor: Monitor<N, M> = Monitor::new(kernel_scene.clone());
-            let start = Instant::now();
-            let events = replay_events(&stream, &mut monitor);
-            kernel_seconds += start.elapsed().as_secs_f64();
-            samples_fed += monitor.samples_fed();
-            let reports: Vec<_> = events
-                .into_iter()
-                .filter_map(|e| match e {
-                    Event::Pulse(r) => Some(r),
-                    Event::Stuck { .. } | Event::Flow(_) => None,
-                })
-                .collect();
-            pulses_detected += reports.len() as u64;
-            let matching = match_truth(&reports, &stream.truth, tolerance);
-            spurious += matching.unmatched_reports.len() as u64;
-            let mut report_of = vec![None; stream.truth.len()];
-            for p in &matching.pairs {
-                report_of[p.truth] = Some(p.report);
-            }
-            for (t, rep) in stream.truth.iter().zip(report_of) {
-                let (lf, lt) = model.forward(t.radius_m.ln(), t.speed_m_s.ln());
-                let oracle = decide(&models, lf, lt, None);
-                let true_ln = (t.peak_force_n.ln(), t.duration_s.ln());
-                let mut o = Outcome {
-                    class,
-                    hertz_ln: (lf, lt),
-                    true_ln,
-                    measured: None,
-                    column: col_miss,
-                    forced: None,
-                    oracle,
-                };
-                if let Some(r) = rep.map(|i| &reports[i]) {
-                    o.forced = r.verdict.forced_choice().map(usize::from);
-                    o.column = match r.verdict {
-                        Verdict::Class { class, .. } => class as usize,
-                        Verdict::Ambiguous { .. } => col_amb,
-                        Verdict::OutOfEnvelope { .. } => col_out,
-                        Verdict::Rejected(reason) => {
-                            *rejected_by_reason.entry(reason.name()).or_default() += 1;
-                            col_rej
-                        }
-                    };
-                    o.measured = r.measurement.map(|m| {
-                        let m = measurement_from_kernel(&m);
-                        MeasuredLn {
-                            ln_force: m.peak_force_n.ln(),
-                            ln_duration: m.duration_s.ln(),
-                            sigma_ln_force: m.sigma_ln_force,
-                            sigma_ln_duration: m.sigma_ln_duration,
-                        }
-                    });
-                }
-                outcomes.push(o);
-            }
+            jobs.push(StreamJob { class, chunk, n });
             left -= n;
             chunk += 1;
-            done += n;
-            progress(done, total);
         }
     }
+    let run_job = |_: usize, job: &StreamJob| -> Result<ChunkResult, EvalError> {
+        run_stream::<N, M>(scene, opts, &kernel_scene, &models, tolerance, job)
+    };
+    map_ordered(&jobs, run_job, |_, r| {
+        let r = r?;
+        outcomes.extend(r.outcomes);
+        for reason in r.rejected {
+            *rejected_by_reason.entry(reason).or_default() += 1;
+        }
+        samples_fed += r.samples_fed;
+        pulses_detected += r.pulses_detected;
+        spurious += r.spurious;
+        kernel_seconds += r.kernel_seconds;
+        done += r.impacts;
+        progress(done, total);
+        Ok::<(), EvalError>(())
+    })?;
 
     let noise = estimate_noise(&outcomes, col_rej);
     let feature_noise = noise.feature_noise();
@@ -859,6 +817,112 @@ fn run<const N: usize, M: Backend>(
         } else {
             0.0
         },
+    })
+}
+
+/// One stream of one class: its seed's impacts, simulated and replayed.
+struct StreamJob {
+    class: usize,
+    /// Index of the stream within its class.
+    chunk: usize,
+    /// Impacts in the stream.
+    n: usize,
+}
+
+/// What one stream contributes to the evaluation.
+struct ChunkResult {
+    impacts: usize,
+    outcomes: Vec<Outcome>,
+    /// Reason of every rejected verdict, in stream order.
+    rejected: Vec<&'static str>,
+    samples_fed: u64,
+    pulses_detected: u64,
+    spurious: u64,
+    kernel_seconds: f64,
+}
+
+/// Simulates stream `job` (seed from `(opts.seed, class, chunk)`), replays it through a fresh
+/// `Monitor` and scores every impact.
+fn run_stream<const N: usize, M: Backend + Send + Sync>(
+    scene: &SceneFile,
+    opts: &EvalOptions,
+    kernel_scene: &coalshock::Scene<N, M>,
+    models: &[ClassModel],
+    tolerance: u64,
+    job: &StreamJob,
+) -> Result<ChunkResult, EvalError> {
+    let k = models.len();
+    let (col_amb, col_out, col_rej, col_miss) = (k, k + 1, k + 2, k + 3);
+    let (class, model) = (job.class, &models[job.class]);
+    let stream = generate_class(
+        scene,
+        class,
+        job.n,
+        stream_seed(opts.seed, class, job.chunk),
+        &opts.stream,
+    )?;
+    let mut monitor: Monitor<N, M> = Monitor::new(kernel_scene.clone());
+    let start = Instant::now();
+    let events = replay_events(&stream, &mut monitor);
+    let kernel_seconds = start.elapsed().as_secs_f64();
+    let reports: Vec<_> = events
+        .into_iter()
+        .filter_map(|e| match e {
+            Event::Pulse(r) => Some(r),
+            Event::Stuck { .. } | Event::Flow(_) => None,
+        })
+        .collect();
+    let matching = match_truth(&reports, &stream.truth, tolerance);
+    let mut report_of = vec![None; stream.truth.len()];
+    for p in &matching.pairs {
+        report_of[p.truth] = Some(p.report);
+    }
+    let mut outcomes = Vec::with_capacity(job.n);
+    let mut rejected = Vec::new();
+    for (t, rep) in stream.truth.iter().zip(report_of) {
+        let (lf, lt) = model.forward(t.radius_m.ln(), t.speed_m_s.ln());
+        let oracle = decide(models, lf, lt, None);
+        let true_ln = (t.peak_force_n.ln(), t.duration_s.ln());
+        let mut o = Outcome {
+            class,
+            hertz_ln: (lf, lt),
+            true_ln,
+            measured: None,
+            column: col_miss,
+            forced: None,
+            oracle,
+        };
+        if let Some(r) = rep.map(|i| &reports[i]) {
+            o.forced = r.verdict.forced_choice().map(usize::from);
+            o.column = match r.verdict {
+                Verdict::Class { class, .. } => class as usize,
+                Verdict::Ambiguous { .. } => col_amb,
+                Verdict::OutOfEnvelope { .. } => col_out,
+                Verdict::Rejected(reason) => {
+                    rejected.push(reason.name());
+                    col_rej
+                }
+            };
+            o.measured = r.measurement.map(|m| {
+                let m = measurement_from_kernel(&m);
+                MeasuredLn {
+                    ln_force: m.peak_force_n.ln(),
+                    ln_duration: m.duration_s.ln(),
+                    sigma_ln_force: m.sigma_ln_force,
+                    sigma_ln_duration: m.sigma_ln_duration,
+                }
+            });
+        }
+        outcomes.push(o);
+    }
+    Ok(ChunkResult {
+        impacts: job.n,
+        outcomes,
+        rejected,
+        samples_fed: monitor.samples_fed(),
+        pulses_detected: reports.len() as u64,
+        spurious: matching.unmatched_reports.len() as u64,
+        kernel_seconds,
     })
 }
 

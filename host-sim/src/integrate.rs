@@ -38,7 +38,14 @@
 //! must pass the error test) and, for the end and the kink, a last Newton correction lands on
 //! it, so the integration stops (contact end) or restarts (kink, clamp) there. After the run,
 //! `delta_max` is the root of `delta'` and the peak force the maximum of `F` over the
-//! continuous output, refined by golden-section search.
+//! continuous output: the largest of the forces at the step starts (known from the stepping;
+//! for a clamped law also at the step middles), refined by Brent's method between its
+//! neighbours (about 10 evaluations of the output).
+//!
+//! # Per-step cost
+//! The step controller's factor `err^(0.2 - 0.75 beta) / facold^beta` is one `exp` of
+//! logarithms (`ln facold` is kept), not two `powf`; a series of the force at increasing times
+//! walks the steps instead of searching them.
 //!
 //! A history-dependent law ([`ForceLaw::awaits_turn`]: Thornton's elastic-plastic contact)
 //! adds a fourth switching function, the rate `v`: where the penetration turns the step lands
@@ -177,7 +184,8 @@ pub struct WorkStats {
     /// Evaluations of the right-hand side, i.e. of the force law, by the integrator. Not
     /// counted: the event search on the continuous output (for the damped laws one bound and
     /// two values of the clamp's switching function per step, about 60 more near a switch)
-    /// and the peak-force search after the run (about 40).
+    /// and the peak-force search after the run (about 10, plus one per step for a clamped
+    /// law).
     pub force_evals: usize,
     /// Stops and restarts at the Adams kink `delta = d`.
     pub kink_restarts: usize,
@@ -301,10 +309,17 @@ impl ContactSolution {
         }
         let n = n as usize;
         let mut out = Vec::with_capacity(n + 1);
+        // The times only move forward: each segment is found by walking, not searching; the
+        // values are those of `force_at` bit for bit.
+        let mut cursor = 0usize;
         for i in 0..=n {
             let t = i as f64 * interval_s;
-            if let Some(f) = self.force_at(t) {
-                out.push((t, f));
+            let tau = t / self.scales.time_s;
+            if let Some((j, theta)) = find_segment_walk(&self.segments, tau, &mut cursor) {
+                let y = self.segments[j].eval(theta);
+                let (d, dd) = (y[0] * self.scales.delta_m, y[1] * self.scales.speed_m_s);
+                let law = law_at(&self.law, self.turned.as_ref(), tau);
+                out.push((t, law.force(d, dd)));
             }
         }
         Ok(out)
@@ -332,19 +347,43 @@ fn law_at<'a>(first: &'a ForceLaw, turned: Option<&'a (f64, ForceLaw)>, tau: f64
     }
 }
 
+/// The segment holding `tau` (the last one starting at or before it, or the first) and the
+/// step fraction there, or `None` outside `[0, end of the last segment]`; binary search.
 fn find_segment(segments: &[Segment], tau: f64) -> Option<(usize, f64)> {
     let last = segments.last()?;
     if !(tau >= 0.0 && tau <= last.t0 + last.h) {
         return None;
     }
     let i = segments.partition_point(|s| s.t0 <= tau).saturating_sub(1);
-    let s = &segments[i];
-    let theta = if s.h > 0.0 {
+    Some((i, step_fraction(&segments[i], tau)))
+}
+
+/// [`find_segment`] for increasing `tau`: walks forward from `cursor` (the index found by the
+/// previous call, 0 at first) instead of searching; the same result for any `tau` (a step
+/// back in time searches afresh).
+fn find_segment_walk(segments: &[Segment], tau: f64, cursor: &mut usize) -> Option<(usize, f64)> {
+    let last = segments.last()?;
+    if !(tau >= 0.0 && tau <= last.t0 + last.h) {
+        return None;
+    }
+    let mut i = (*cursor).min(segments.len() - 1);
+    if segments[i].t0 > tau {
+        i = segments.partition_point(|s| s.t0 <= tau).saturating_sub(1);
+    }
+    while i + 1 < segments.len() && segments[i + 1].t0 <= tau {
+        i += 1;
+    }
+    *cursor = i;
+    Some((i, step_fraction(&segments[i], tau)))
+}
+
+/// `theta = (tau - t0) / h` clamped to [0, 1] (0 for an empty segment).
+fn step_fraction(s: &Segment, tau: f64) -> f64 {
+    if s.h > 0.0 {
         ((tau - s.t0) / s.h).clamp(0.0, 1.0)
     } else {
         0.0
-    };
-    Some((i, theta))
+    }
 }
 
 fn eval_segments(segments: &[Segment], tau: f64) -> Option<[f64; 2]> {
@@ -364,12 +403,15 @@ struct Rhs {
     /// T / (u m)
     p: f64,
     evals: usize,
+    /// The force (N) of the last evaluation.
+    last_force_n: f64,
 }
 
 impl Rhs {
     fn f(&mut self, y: [f64; 2]) -> [f64; 2] {
         self.evals += 1;
         let force = self.law.force(y[0] * self.d_m, y[1] * self.u_m_s);
+        self.last_force_n = force;
         [self.cx * y[1], self.g - self.p * force]
     }
 }
@@ -390,6 +432,8 @@ fn lin(y: [f64; 2], h: f64, terms: &[(f64, [f64; 2])]) -> [f64; 2] {
 struct Trial {
     y1: [f64; 2],
     f1: [f64; 2],
+    /// The force (N) at `y1`.
+    force1_n: f64,
     seg: Segment,
     /// Scaled error norm (Dopri5), 0 for RK4.
     err: f64,
@@ -471,6 +515,7 @@ fn dopri_step(rhs: &mut Rhs, t: f64, y: [f64; 2], k1: [f64; 2], h: f64, tol: Tol
     Trial {
         y1,
         f1: k7,
+        force1_n: rhs.last_force_n,
         seg: Segment { t0: t, h, r },
         err: (err2 / 2.0).sqrt(),
     }
@@ -494,6 +539,7 @@ fn rk4_step(rhs: &mut Rhs, t: f64, y: [f64; 2], k1: [f64; 2], h: f64) -> Trial {
     Trial {
         y1,
         f1,
+        force1_n: rhs.last_force_n,
         seg: Segment::hermite(t, h, y, k1, y1, f1),
         err: 0.0,
     }
@@ -678,6 +724,7 @@ pub fn integrate_contact(
         g: time_s * problem.gravity_m_s2 / u,
         p: time_s / (u * m),
         evals: 0,
+        last_force_n: 0.0,
     };
     let mut x_kink = law.kink_m().map(|d| d / d_m);
     let mut clamp_switch = ClampSwitch { law, d_m, u_m_s: u };
@@ -686,9 +733,12 @@ pub fn integrate_contact(
 
     let mut work = WorkStats::default();
     let mut segments: Vec<Segment> = Vec::new();
+    // The force (N) at each segment's start, known from the stepping (the peak search's grid).
+    let mut start_force_n: Vec<f64> = Vec::new();
     let mut t = 0.0_f64;
     let mut y = [0.0, 1.0];
     let mut f = rhs.f(y);
+    let mut force_n = rhs.last_force_n;
 
     // Dopri5 controller state (Hairer's DOPRI5: beta = 0.04, safety 0.9, factors 0.2..10).
     const BETA: f64 = 0.04;
@@ -696,7 +746,10 @@ pub fn integrate_contact(
     const FACMIN: f64 = 0.2;
     const FACMAX: f64 = 10.0;
     let expo1 = 0.2 - BETA * 0.75;
-    let mut facold = 1e-4_f64;
+    // ln of Hairer's `facold` (the last accepted error, at least 1e-4): the controller's
+    // factor `err^expo1 / facold^BETA` is one exp of logs, not two powf.
+    let ln_facold_min = 1e-4_f64.ln();
+    let mut ln_facold = ln_facold_min;
     let mut last_rejected = false;
     let hmax = limits.max_step_tc;
     let mut h = limits
@@ -755,15 +808,17 @@ pub fn integrate_contact(
         }
         let mut h_next = h;
         if let Method::Dopri5 = method {
-            let fac11 = trial.err.powf(expo1);
-            let fac = (fac11 / facold.powf(BETA) / SAFE).clamp(1.0 / FACMAX, 1.0 / FACMIN);
+            let ln_err = trial.err.ln();
             if trial.err > 1.0 {
                 work.rejected_steps += 1;
+                let fac11 = (expo1 * ln_err).exp();
                 h /= (fac11 / SAFE).min(1.0 / FACMIN);
                 last_rejected = true;
                 continue;
             }
-            facold = trial.err.max(1e-4);
+            let fac = ((expo1 * ln_err - BETA * ln_facold).exp() / SAFE)
+                .clamp(1.0 / FACMAX, 1.0 / FACMIN);
+            ln_facold = ln_err.max(ln_facold_min);
             h_next = (h / fac).min(hmax);
             if last_rejected {
                 h_next = h_next.min(h);
@@ -826,6 +881,7 @@ pub fn integrate_contact(
                 let mut seg = seg;
                 seg.h = t_e - t;
                 segments.push(seg);
+                start_force_n.push(force_n);
                 if is_end {
                     let rebound = -y_e[1] * u;
                     let duration_s = t_e * time_s;
@@ -834,6 +890,7 @@ pub fn integrate_contact(
                         (law, turned),
                         scales,
                         segments,
+                        &start_force_n,
                         work,
                         duration_s,
                         rebound,
@@ -855,15 +912,18 @@ pub fn integrate_contact(
                 t = t_e;
                 y = y_e;
                 f = rhs.f(y);
+                force_n = rhs.last_force_n;
                 h = h_next;
                 retry_scale = 1.0;
             }
             None => {
                 work.steps += 1;
                 segments.push(trial.seg);
+                start_force_n.push(force_n);
                 t += h;
                 y = trial.y1;
                 f = trial.f1;
+                force_n = trial.force1_n;
                 h = h_next;
                 retry_scale = 1.0;
             }
@@ -901,52 +961,86 @@ impl Landing {
     }
 }
 
-/// Golden-section maximisation of `g` on `[a, b]` to width `tol`.
-fn golden_max(g: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> (f64, f64) {
-    const INVPHI: f64 = 0.618_033_988_749_894_9;
-    let mut c = b - INVPHI * (b - a);
-    let mut d = a + INVPHI * (b - a);
-    let mut gc = g(c);
-    let mut gd = g(d);
-    while (b - a).abs() > tol {
-        if gc >= gd {
-            b = d;
-            d = c;
-            gd = gc;
-            c = b - INVPHI * (b - a);
-            gc = g(c);
+/// Maximum of `g` on `[a, b]`, to a bracket narrower than `tol`, by Brent's method
+/// (parabolic interpolation safeguarded by golden-section steps; Brent, *Algorithms for
+/// Minimization without Derivatives*, 1973, ch. 5, `localmin` applied to `-g`). For a smooth
+/// peak it needs about 10 evaluations where golden section alone needs about 35.
+fn brent_max(g: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> (f64, f64) {
+    /// `(3 - sqrt 5) / 2`, the golden-section fraction.
+    const C: f64 = 0.381_966_011_250_105_1;
+    let tol1 = 0.25 * tol;
+    let tol2 = 2.0 * tol1;
+    let mut x = a + C * (b - a);
+    let (mut w, mut v) = (x, x);
+    let mut fx = -g(x);
+    let (mut fw, mut fv) = (fx, fx);
+    let (mut d, mut e) = (0.0_f64, 0.0_f64);
+    for _ in 0..200 {
+        let xm = 0.5 * (a + b);
+        if (x - xm).abs() <= tol2 - 0.5 * (b - a) {
+            break;
+        }
+        let mut golden = true;
+        if e.abs() > tol1 {
+            let r = (x - w) * (fx - fv);
+            let q = (x - v) * (fx - fw);
+            let mut p = (x - v) * q - (x - w) * r;
+            let mut q = 2.0 * (q - r);
+            if q > 0.0 {
+                p = -p;
+            } else {
+                q = -q;
+            }
+            let e_old = e;
+            e = d;
+            if p.abs() < (0.5 * q * e_old).abs() && p > q * (a - x) && p < q * (b - x) {
+                d = p / q;
+                let u = x + d;
+                if u - a < tol2 || b - u < tol2 {
+                    d = tol1.copysign(xm - x);
+                }
+                golden = false;
+            }
+        }
+        if golden {
+            e = if x >= xm { a - x } else { b - x };
+            d = C * e;
+        }
+        let u = if d.abs() >= tol1 {
+            x + d
         } else {
-            a = c;
-            c = d;
-            gc = gd;
-            d = a + INVPHI * (b - a);
-            gd = g(d);
+            x + tol1.copysign(d)
+        };
+        let fu = -g(u);
+        if fu <= fx {
+            if u >= x {
+                a = x;
+            } else {
+                b = x;
+            }
+            (v, fv, w, fw, x, fx) = (w, fw, x, fx, u, fu);
+        } else {
+            if u < x {
+                a = u;
+            } else {
+                b = u;
+            }
+            if fu <= fw || w == x {
+                (v, fv, w, fw) = (w, fw, u, fu);
+            } else if fu <= fv || v == x || v == w {
+                (v, fv) = (u, fu);
+            }
         }
     }
-    if gc >= gd { (c, gc) } else { (d, gd) }
+    (x, -fx)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn finish(
-    (law, turned): (ForceLaw, Option<(f64, ForceLaw)>),
-    scales: Scales,
-    segments: Vec<Segment>,
-    work: WorkStats,
-    duration_s: f64,
-    rebound_speed_m_s: f64,
-    mass_kg: f64,
-    gravity_m_s2: f64,
-) -> ContactSolution {
-    let force_tau = |tau: f64| -> f64 {
-        let law = law_at(&law, turned.as_ref(), tau);
-        eval_segments(&segments, tau)
-            .map(|y| law.force(y[0] * scales.delta_m, y[1] * scales.speed_m_s))
-            .unwrap_or(0.0)
-    };
-    // Maximum penetration: largest x at step ends and at roots of v.
+/// Largest penetration `x` (scaled) and its time `tau`: the largest at step ends and at the
+/// roots of `v` on the continuous output.
+fn max_penetration(segments: &[Segment]) -> (f64, f64) {
     let mut x_best = 0.0_f64;
     let mut t_best = 0.0_f64;
-    for s in &segments {
+    for s in segments {
         let y0 = s.eval(0.0);
         let y1 = s.eval(1.0);
         if y0[0] > x_best {
@@ -966,22 +1060,55 @@ fn finish(
             }
         }
     }
-    // Peak force: sample each step at its start and middle, then golden section around the
-    // best sample.
+    (x_best, t_best)
+}
+
+/// The segments that hold `[lo, hi]` (scaled times inside the output): evaluating there gives
+/// the whole output's values without searching all of it.
+fn covering(segments: &[Segment], lo: f64, hi: f64) -> &[Segment] {
+    let last = segments.len().saturating_sub(1);
+    let i_lo = find_segment(segments, lo).map_or(0, |(i, _)| i);
+    let i_hi = find_segment(segments, hi).map_or(last, |(i, _)| i);
+    &segments[i_lo.min(i_hi)..=i_hi]
+}
+
+/// Peak force over the continuous output and the end of the main force pulse:
+/// `(tau of the peak, F_max in N, tau of the pulse end)`.
+///
+/// `law` is in force before the turn of a history-dependent law, `turned` (its time and law)
+/// from it on. The force is known at every step start from the stepping (`start_force_n`);
+/// for a clamped law it is also sampled at every step's middle (to bracket its first zero
+/// after the peak).
+/// The peak is refined by [`brent_max`] between the neighbours of the largest sample; the pulse
+/// end is the first zero of `F` after the peak (bisection between samples to 1e-13 relative;
+/// `F` is continuous and clamped at zero), or the contact end.
+fn peak_force(
+    (law, turned): (&ForceLaw, Option<&(f64, ForceLaw)>),
+    scales: Scales,
+    segments: &[Segment],
+    start_force_n: &[f64],
+    t_end: f64,
+) -> (f64, f64, f64) {
     let force_y = |tau: f64, y: [f64; 2]| {
-        law_at(&law, turned.as_ref(), tau).force(y[0] * scales.delta_m, y[1] * scales.speed_m_s)
+        law_at(law, turned, tau).force(y[0] * scales.delta_m, y[1] * scales.speed_m_s)
     };
-    let t_end = duration_s / scales.time_s;
-    let mut samples: Vec<f64> = Vec::with_capacity(2 * segments.len() + 1);
-    let mut sample_f: Vec<f64> = Vec::with_capacity(2 * segments.len() + 1);
-    for s in &segments {
+    let force_in = |seg: &[Segment], tau: f64| {
+        find_segment(seg, tau).map_or(0.0, |(i, th)| force_y(tau, seg[i].eval(th)))
+    };
+    let clamped = law.is_clamped();
+    let per_step = if clamped { 2 } else { 1 };
+    let mut samples: Vec<f64> = Vec::with_capacity(per_step * segments.len() + 1);
+    let mut sample_f: Vec<f64> = Vec::with_capacity(per_step * segments.len() + 1);
+    for (s, &f0) in segments.iter().zip(start_force_n) {
         samples.push(s.t0);
-        sample_f.push(force_y(s.t0, s.eval(0.0)));
-        samples.push(s.t0 + 0.5 * s.h);
-        sample_f.push(force_y(s.t0 + 0.5 * s.h, s.eval(0.5)));
+        sample_f.push(f0);
+        if clamped {
+            samples.push(s.t0 + 0.5 * s.h);
+            sample_f.push(force_y(s.t0 + 0.5 * s.h, s.eval(0.5)));
+        }
     }
     samples.push(t_end);
-    sample_f.push(force_tau(t_end));
+    sample_f.push(force_in(segments, t_end));
     let mut i_best = 0;
     let mut f_best = f64::NEG_INFINITY;
     for (i, &fv) in sample_f.iter().enumerate() {
@@ -993,7 +1120,9 @@ fn finish(
     let lo = samples[i_best.saturating_sub(1)];
     let hi = samples[(i_best + 1).min(samples.len() - 1)];
     let (t_peak, f_peak) = if hi > lo {
-        let (tp, fp) = golden_max(force_tau, lo, hi, 1e-8_f64.max(8.0 * f64::EPSILON * hi));
+        let seg = covering(segments, lo, hi);
+        let tol = 1e-8_f64.max(8.0 * f64::EPSILON * hi);
+        let (tp, fp) = brent_max(|tau| force_in(seg, tau), lo, hi, tol);
         if fp >= f_best {
             (tp, fp)
         } else {
@@ -1002,24 +1131,18 @@ fn finish(
     } else {
         (samples[i_best], f_best)
     };
-    // End of the main force pulse: the first zero of F after the peak (bisection between
-    // samples; F is continuous and clamped at zero).
-    let t_peak_tau = t_peak;
+    let first_zero = samples
+        .iter()
+        .zip(&sample_f)
+        .position(|(&tau, &fv)| clamped && tau > t_peak && fv <= 0.0);
     let mut pulse_end = t_end;
-    let first_zero = if law.is_clamped() {
-        samples
-            .iter()
-            .zip(&sample_f)
-            .position(|(&tau, &fv)| tau > t_peak_tau && fv <= 0.0)
-    } else {
-        None
-    };
     if let Some(j) = first_zero {
-        let mut lo = samples[j.saturating_sub(1)].max(t_peak_tau);
+        let mut lo = samples[j.saturating_sub(1)].max(t_peak);
         let mut hi = samples[j];
+        let seg = covering(segments, lo, hi);
         while hi - lo > 1e-13 * hi {
             let mid = 0.5 * (lo + hi);
-            if force_tau(mid) > 0.0 {
+            if force_in(seg, mid) > 0.0 {
                 lo = mid;
             } else {
                 hi = mid;
@@ -1027,6 +1150,25 @@ fn finish(
         }
         pulse_end = hi;
     }
+    (t_peak, f_peak, pulse_end)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    (law, turned): (ForceLaw, Option<(f64, ForceLaw)>),
+    scales: Scales,
+    segments: Vec<Segment>,
+    start_force_n: &[f64],
+    work: WorkStats,
+    duration_s: f64,
+    rebound_speed_m_s: f64,
+    mass_kg: f64,
+    gravity_m_s2: f64,
+) -> ContactSolution {
+    let t_end = duration_s / scales.time_s;
+    let laws = (&law, turned.as_ref());
+    let (t_peak, f_peak, pulse_end) = peak_force(laws, scales, &segments, start_force_n, t_end);
+    let (x_best, t_best) = max_penetration(&segments);
     let u = scales.speed_m_s;
     ContactSolution {
         delta_max_m: x_best * scales.delta_m,
@@ -1042,5 +1184,29 @@ fn finish(
         law,
         turned,
         segments,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brent's maximisation finds the peak of the Hertz pulse shape `sin^(3/2)(pi t)` (at
+    /// t = 1/2, value 1) from a lopsided bracket to the requested width, in far fewer
+    /// evaluations than golden section (about 40 from a 0.7-wide bracket to 1e-8).
+    #[test]
+    fn brent_finds_the_hertz_peak_in_few_evaluations() {
+        let evals = std::cell::Cell::new(0);
+        let g = |t: f64| {
+            evals.set(evals.get() + 1);
+            (std::f64::consts::PI * t).sin().powf(1.5)
+        };
+        let (t, v) = brent_max(g, 0.2, 0.9, 1e-8);
+        assert!((t - 0.5).abs() < 1e-8, "{t}");
+        assert!((v - 1.0).abs() < 1e-15, "{v}");
+        assert!(evals.get() <= 15, "{} evaluations", evals.get());
+        // A peak at the end of the bracket is found there too.
+        let (t, _) = brent_max(|t: f64| -(t - 0.9) * (t - 0.9), 0.2, 0.9, 1e-8);
+        assert!((t - 0.9).abs() < 1e-8, "{t}");
     }
 }

@@ -12,7 +12,9 @@
 //!   recorded stream (see `host_sim::identify`), printed as a `[sensor]` table;
 //! - `host-sim export`: a scene file as Rust source for a firmware (see `host_sim::export`);
 //! - `host-sim plasticity`: elastic against yielding contacts of a scene's classes (see
-//!   `host_sim::plasticity`, `docs/plasticity.md`).
+//!   `host_sim::plasticity`, `docs/plasticity.md`);
+//! - `host-sim speed`: integrator and end-to-end throughput on this machine (see
+//!   `host_sim::speed`).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -66,6 +68,9 @@ enum Command {
     /// Peak force, contact time and restitution against speed for a scene's yielding classes,
     /// elastic against yielding (table, CSV and SVG).
     Plasticity(host_sim::plasticity::PlasticityArgs),
+    /// Measure host-sim's speed on this machine: integrator impacts/s (Hertz, Adams) and the
+    /// wall time of an end-to-end evaluation of N impacts.
+    Speed(host_sim::speed::SpeedArgs),
 }
 
 /// Flags of `host-sim identify`.
@@ -298,6 +303,7 @@ fn main() -> Result<()> {
         Command::Export(args) => host_sim::export::run(args),
         Command::Caving(args) => host_sim::caving_cli::run_cli(args),
         Command::Plasticity(args) => host_sim::plasticity::run(args),
+        Command::Speed(args) => host_sim::speed::run(args),
     }
 }
 

@@ -44,6 +44,19 @@ pub trait ForceSignal {
     fn is_zero_on(&self, _t0_s: f64, _t1_s: f64) -> bool {
         false
     }
+
+    /// [`ForceSignal::force_n`] for a caller that walks forward in time: `cursor` (0 at the
+    /// start of a walk) keeps the signal's position between calls, so that a signal made of
+    /// many pulses need not search them all. The result is `force_n(t_s)` bit for bit, in any
+    /// order of calls (walking forward is only faster). The default ignores the cursor.
+    fn force_n_walk(&self, t_s: f64, _cursor: &mut usize) -> f64 {
+        self.force_n(t_s)
+    }
+
+    /// [`ForceSignal::is_zero_on`] with the cursor of [`ForceSignal::force_n_walk`].
+    fn is_zero_on_walk(&self, t0_s: f64, t1_s: f64, _cursor: &mut usize) -> bool {
+        self.is_zero_on(t0_s, t1_s)
+    }
 }
 
 /// Any function of time (s) as a force in N, never known to be zero.
@@ -150,7 +163,8 @@ impl ForceTrack {
         &self.pulses
     }
 
-    /// The pulses that start before `t1_s` and could still be on after `t0_s`, latest first.
+    /// The pulses that start before `t1_s` and could still be on after `t0_s`, latest first:
+    /// those starting in `[t0_s - longest duration, t1_s)`, found by binary search.
     fn candidates(&self, t0_s: f64, t1_s: f64) -> impl Iterator<Item = &ForcePulse> {
         let end = self.pulses.partition_point(|p| p.start_s < t1_s);
         let lo = t0_s - self.max_duration_s;
@@ -159,20 +173,60 @@ impl ForceTrack {
             .rev()
             .take_while(move |p| p.start_s >= lo)
     }
+
+    /// The same pulses as [`ForceTrack::candidates`], in the same order, found by walking
+    /// forward from `cursor` (the first index of the previous call's window). A call earlier
+    /// in time than the previous one searches afresh, so any order of calls is right.
+    fn candidates_walk(
+        &self,
+        t0_s: f64,
+        t1_s: f64,
+        cursor: &mut usize,
+    ) -> impl Iterator<Item = &ForcePulse> {
+        let p = &self.pulses;
+        let lo_t = t0_s - self.max_duration_s;
+        let mut lo = (*cursor).min(p.len());
+        if lo > 0 && p[lo - 1].start_s >= lo_t {
+            lo = p.partition_point(|q| q.start_s < lo_t);
+        }
+        while lo < p.len() && p[lo].start_s < lo_t {
+            lo += 1;
+        }
+        *cursor = lo;
+        let mut end = lo;
+        while end < p.len() && p[end].start_s < t1_s {
+            end += 1;
+        }
+        p[lo..end].iter().rev()
+    }
+}
+
+/// Sum of the pulses' forces at `t_s` (N); a pulse starting exactly at `t_s` has zero force
+/// there, so a window that skips it gives the same sum.
+fn force_sum<'a>(pulses: impl Iterator<Item = &'a ForcePulse>, t_s: f64) -> f64 {
+    pulses.map(|p| p.force_at(t_s - p.start_s)).sum()
+}
+
+/// `true` when none of the pulses is on inside `(t0_s, t1_s)`.
+fn none_on<'a>(mut pulses: impl Iterator<Item = &'a ForcePulse>, t0_s: f64, t1_s: f64) -> bool {
+    !pulses.any(|p| p.start_s < t1_s && p.start_s + p.duration_s > t0_s)
 }
 
 impl ForceSignal for ForceTrack {
     fn force_n(&self, t_s: f64) -> f64 {
-        // A pulse starting exactly at `t_s` has zero force there: `candidates` may skip it.
-        self.candidates(t_s, t_s)
-            .map(|p| p.force_at(t_s - p.start_s))
-            .sum()
+        force_sum(self.candidates(t_s, t_s), t_s)
     }
 
     fn is_zero_on(&self, t0_s: f64, t1_s: f64) -> bool {
-        !self
-            .candidates(t0_s, t1_s)
-            .any(|p| p.start_s < t1_s && p.start_s + p.duration_s > t0_s)
+        none_on(self.candidates(t0_s, t1_s), t0_s, t1_s)
+    }
+
+    fn force_n_walk(&self, t_s: f64, cursor: &mut usize) -> f64 {
+        force_sum(self.candidates_walk(t_s, t_s, cursor), t_s)
+    }
+
+    fn is_zero_on_walk(&self, t0_s: f64, t1_s: f64, cursor: &mut usize) -> bool {
+        none_on(self.candidates_walk(t0_s, t1_s, cursor), t0_s, t1_s)
     }
 }
 
@@ -279,9 +333,11 @@ impl Sensor {
     ) {
         let fs = self.spec.sample_rate_hz;
         let k = self.counts_per_n;
+        // The sample instants only move forward: the force is looked up by walking.
+        let mut cursor = 0usize;
         let Some(lin) = &self.linear else {
             for i in 0..n_samples {
-                emit(k * force.force_n(phase_s + i as f64 / fs));
+                emit(k * force.force_n_walk(phase_s + i as f64 / fs, &mut cursor));
             }
             return;
         };
@@ -294,12 +350,16 @@ impl Sensor {
         for i in 0..n_samples {
             let j0 = i * os;
             let (t0, t1) = (fine_t(j0), fine_t(j0 + os));
-            let quiet = force.is_zero_on(t0, t1);
+            let quiet = force.is_zero_on_walk(t0, t1, &mut cursor);
             if quiet && asleep {
                 emit(0.0);
                 continue;
             }
-            let u_now = if quiet { 0.0 } else { k * force.force_n(t0) };
+            let u_now = if quiet {
+                0.0
+            } else {
+                k * force.force_n_walk(t0, &mut cursor)
+            };
             emit(dot(&lin.c, &x) + lin.d * u_now);
             if quiet {
                 mat_vec(&lin.phi_sample, &x, &mut next);
@@ -313,7 +373,7 @@ impl Sensor {
                 asleep = false;
                 let mut u0 = u_now;
                 for step in 1..=os {
-                    let u1 = k * force.force_n(fine_t(j0 + step));
+                    let u1 = k * force.force_n_walk(fine_t(j0 + step), &mut cursor);
                     mat_vec(&lin.phi, &x, &mut next);
                     for ((v, g0), g1) in next.iter_mut().zip(&lin.gamma0).zip(&lin.gamma1) {
                         *v += g0 * u0 + g1 * (u1 - u0);

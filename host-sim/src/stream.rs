@@ -10,8 +10,9 @@
 //!
 //! Determinism: one seed gives one stream on every machine. Three independent ChaCha8 streams
 //! are derived from it (impacts and timing; sensor noise; faults), so switching a fault on
-//! or off does not change the impacts. Impacts are simulated one after another; nothing
-//! depends on the number of threads.
+//! or off does not change the impacts. The impacts are drawn one after another; their pulses are
+//! simulated on every core ([`crate::par`]) and taken in order, so nothing depends on the
+//! number of threads.
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -25,6 +26,7 @@ use serde::{Deserialize, Serialize};
 use crate::hertz64::HertzImpact64;
 use crate::impact::{ImpactSpec, simulate};
 use crate::integrate::SimError;
+use crate::par::map_ordered;
 use crate::scene::{SceneError, SceneFile, SpeedSpec};
 use crate::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
 
@@ -669,25 +671,26 @@ fn generate_inner(
     };
     let mut pulses = Vec::with_capacity(draws.len());
     let mut truth = Vec::with_capacity(draws.len());
-    for (i, d) in draws.iter().enumerate() {
-        let (pulse, peak_tau_s, peak_force_n, duration_s) = match options.pulse_model {
-            PulseModel::HertzSine => (
-                hertz_sine_pulse(&d.hertz, d.start_s),
-                0.5 * d.hertz.duration_s,
-                d.hertz.peak_force_n,
-                d.hertz.duration_s,
-            ),
-            PulseModel::Integrator => {
-                simulate_pulse(scene, d, options, fine_step_s).map_err(|error| {
-                    StreamError::Simulation {
-                        impact: i,
-                        radius_m: d.radius_m,
-                        speed_m_s: d.speed_m_s,
-                        error,
-                    }
-                })?
+    // Each impact's pulse depends on its draw only: simulated on every core, taken in order.
+    let make_pulse = |i: usize, d: &Draw| match options.pulse_model {
+        PulseModel::HertzSine => Ok((
+            hertz_sine_pulse(&d.hertz, d.start_s),
+            0.5 * d.hertz.duration_s,
+            d.hertz.peak_force_n,
+            d.hertz.duration_s,
+        )),
+        PulseModel::Integrator => simulate_pulse(scene, d, options, fine_step_s).map_err(|error| {
+            StreamError::Simulation {
+                impact: i,
+                radius_m: d.radius_m,
+                speed_m_s: d.speed_m_s,
+                error,
             }
-        };
+        }),
+    };
+    map_ordered(&draws, make_pulse, |i, made| {
+        let d = &draws[i];
+        let (pulse, peak_tau_s, peak_force_n, duration_s) = made?;
         let peak_time_s = d.start_s + peak_tau_s;
         truth.push(Truth {
             class: d.class,
@@ -707,7 +710,8 @@ fn generate_inner(
         });
         pulses.push(pulse);
         progress(i + 1);
-    }
+        Ok::<(), StreamError>(())
+    })?;
 
     // 3. Faults on impacts (drawn for every impact, so the draws do not depend on the shares).
     let mut frng = rng_for(seed, RNG_FAULTS);

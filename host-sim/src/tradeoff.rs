@@ -678,7 +678,7 @@ fn scene_grid(scene: &SceneFile, points: usize) -> Vec<(Material64, f64, f64)> {
 }
 
 /// Accuracy of the kernel with backend `M` on `scene` ([`crate::evaluate::evaluate`]).
-fn accuracy_of<M: Backend>(
+fn accuracy_of<M: Backend + Send + Sync>(
     name: &str,
     scene: &SceneFile,
     cfg: &TradeoffConfig,
@@ -711,7 +711,7 @@ fn timing_options(lead_in_s: f64) -> StreamOptions {
     }
 }
 
-fn backend_row<M: Backend>(
+fn backend_row<M: Backend + Send + Sync>(
     cfg: &TradeoffConfig,
     scenes: &[(String, SceneFile)],
     quiet: &Stream,

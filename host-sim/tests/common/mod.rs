@@ -22,3 +22,12 @@ pub fn chain_spec(fs: f64, modes: &[(f64, f64, f64)], acc: Option<(f64, f64)>) -
     });
     s
 }
+
+/// The scene file `name` shipped in the workspace's `scenes/` folder.
+pub fn shipped_scene(name: &str) -> host_sim::scene::SceneFile {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("scenes")
+        .join(name);
+    host_sim::scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
