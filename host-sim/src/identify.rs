@@ -80,18 +80,19 @@
 //! # Limits
 //!
 //! The modes must ring in the gaps between pulses (a gap of a few ms); the lowest mode is
-//! resolved only to the extent that the gaps cover part of its period. Measured on streams of
-//! the paper scene (4 counts RMS, 100 impacts, modes 180 Hz / 0.02 / 0.1, 650 Hz / 0.01 /
-//! 0.05, 2.1 kHz / 0.02 / 0.03): at 100 kS/s every frequency within 0.03 %, damping within
-//! 1 % (the 180 Hz mode's within 7.2 % on 60 impacts), gain within 2 %; the 40 kHz, 0.05
-//! accelerometer within 0.05 % and 1.4 % (see `tests/identify.rs`). At 26.7 kS/s the frequencies and dampings are as good, but the
-//! 180 Hz gain comes out 5-11 % low (jackknife error 3-7 %: pulses of 3-12 samples, ring-downs
-//! of 50-250 samples), the others within 5 %; a 12 kHz, 0.05 resonance is found within 0.1 %
-//! and 6 %. A resonance above the Nyquist frequency (a 22 kHz part at 26.7 kS/s) aliases: its
-//! estimate scatters between groups and is not reported. Pile-ups, spikes and
-//! dropped samples are not handled (a flagged event is treated as one pulse). Pulses are
-//! assumed to end when their force is zero; the accelerometer's ring is then seen for only
-//! `~1 / (zeta_a w_a)` s, a few samples, so its estimate is far less precise than the modes'.
+//! resolved only to the extent that the gaps cover part of its period. Measured by
+//! `tests/identify.rs` (4 counts RMS, 60 impacts, modes 180 Hz / 0.02 / 0.1, 650 Hz / 0.01 /
+//! 0.05, 2.1 kHz / 0.02 / 0.03 at 100 kS/s, 0.1 at 26.7 kS/s): every frequency within 0.15 %,
+//! the 650 Hz and 2.1 kHz modes' damping within 1 % and gain within 0.7 %; the 180 Hz mode's
+//! damping within 8.3 % at 100 kS/s and 12.9 % at 26.7 kS/s (it turns by a third of a period
+//! over a 2 ms gap), its gain within 4.5 %; the 40 kHz, 0.05 accelerometer within 0.03 % and
+//! 2.3 %. A resonance above the Nyquist frequency aliases and one as damped as a MEMS part's
+//! band (6.3 kHz, zeta 0.7 at 26.7 kS/s decays to a third per sample) rings for a sample or
+//! two: their estimates scatter between groups and are reported as not identified. A lightly
+//! damped resonance that rings on into the free windows (a 35 kHz, zeta 0.02 piezo at
+//! 100 kS/s rings for about 1 ms) sets the pencil's lag to 1 sample, and the 180 Hz mode is
+//! then lost. Pile-ups, spikes and dropped samples are not handled (a flagged event is treated
+//! as one pulse).
 
 use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
 
