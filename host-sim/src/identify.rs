@@ -949,8 +949,8 @@ fn identify_accelerometer(
         // The highest oscillating pole that is not one of the beam's modes left over.
         modes_of(&p, 1, fs)
             .into_iter()
-            .filter(|&(f, _)| !is_mode(f))
-            .last()
+            .rev()
+            .find(|&(f, _)| !is_mode(f))
     };
     let (f, z) = estimate(&|_| true)?;
     let mut fj = Vec::new();
