@@ -90,14 +90,15 @@ impl RejectReason {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Verdict {
-    /// The class with posterior at least the scene's confidence.
+    /// The class with posterior at least the scene's confidence threshold,
+    /// `1 - confident_error_rate`.
     Class {
         /// Index into [`Scene::classes`].
         class: u8,
         /// Posterior probability of that class.
         posterior: f32,
     },
-    /// Inside the overlap of two or more envelopes: no class reaches the confidence.
+    /// Inside the overlap of two or more envelopes: no class reaches the confidence threshold.
     Ambiguous {
         /// The most probable class (the forced choice).
         best: u8,
@@ -138,8 +139,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// leave at the pulse's duration ([`Scene::chain_bias`]). If the pulse is more than `out_sigmas` outside every envelope
     /// it is `OutOfEnvelope` (with the nearest class); otherwise the posterior of class `c` is
     /// `prior_c L_c / sum_j prior_j L_j` with `L` from [`crate::envelope::Envelope::ln_likelihood`],
-    /// and the best class is reported as `Class` when its posterior reaches `confidence`, else
-    /// `Ambiguous`. Never panics: a non-finite or non-positive measurement is
+    /// and the best class is reported as `Class` when its posterior reaches
+    /// `1 - confident_error_rate`, else `Ambiguous`. Never panics: a non-finite or non-positive measurement is
     /// `Rejected(Implausible)`.
     pub fn classify(&self, m: &Measurement) -> Verdict {
         self.classify_with_likelihoods(m).0
@@ -229,7 +230,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let top = lls.iter().take(n).fold(f32::NEG_INFINITY, |a, &b| a.max(b));
         let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - top)).sum();
         let posterior = M::exp(best_wide - top) / sum;
-        let verdict = if posterior >= s.confidence {
+        let verdict = if posterior >= s.confidence_threshold() {
             Verdict::Class {
                 class: best,
                 posterior,

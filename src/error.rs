@@ -22,7 +22,7 @@ pub enum Error {
     TooFewClasses,
     /// More particle classes than the scene's fixed capacity.
     TooManyClasses,
-    /// The setting is outside its documented range (for example a confidence outside `(0.5, 1)`).
+    /// The setting is outside its documented range (for example a confident-error rate outside `(0, 0.5)`).
     OutOfRange(&'static str),
     /// A stage of the sensor chain cannot be inverted (see [`crate::equaliser`]).
     Chain {

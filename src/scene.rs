@@ -165,8 +165,12 @@ pub struct Settings {
     /// `ln F_max` and `ln t_c`: what damping, the plate and the sensor do that the Hertz model
     /// does not.
     pub model_sigma: f32,
-    /// Posterior above which a class is reported; below it the pulse is `Ambiguous`.
-    pub confidence: f32,
+    /// The share of `Class` verdicts the user accepts to be wrong, in `(0, 0.5)` (default
+    /// 0.01): a class is reported when its posterior reaches `1 - confident_error_rate`
+    /// ([`Settings::confidence_threshold`]), below that the pulse is `Ambiguous`. With
+    /// calibrated posteriors every `Class` verdict is then wrong with probability at most
+    /// this rate, so the confident-error rate over any set of verdicts is at most this rate.
+    pub confident_error_rate: f32,
     /// Standardised distance outside every envelope beyond which a pulse is `OutOfEnvelope`.
     pub out_sigmas: f32,
     /// Midpoint rows along `ln u` of the quadrature that integrates the separability at build
@@ -337,7 +341,7 @@ impl Default for Settings {
             baseline_tau_s: 0.02,
             stuck_samples: 64,
             model_sigma: 0.01,
-            confidence: 0.9,
+            confident_error_rate: 0.01,
             out_sigmas: 4.0,
             separability_grid: 48,
             shape_tolerance: 0.02,
@@ -349,6 +353,12 @@ impl Default for Settings {
 }
 
 impl Settings {
+    /// Posterior a class needs for a `Class` verdict: `1 - confident_error_rate`
+    /// (dimensionless, in `(0.5, 1)` for a valid rate).
+    pub fn confidence_threshold(&self) -> f32 {
+        1.0 - self.confident_error_rate
+    }
+
     fn check(&self) -> Result<(), Error> {
         positive(self.trigger_sigmas, "trigger_sigmas")?;
         positive(self.release_sigmas, "release_sigmas")?;
@@ -370,8 +380,8 @@ impl Settings {
         if self.release_sigmas > self.trigger_sigmas {
             return Err(Error::InvertedRange("release_sigmas..trigger_sigmas"));
         }
-        if !(self.confidence > 0.5 && self.confidence < 1.0) {
-            return Err(Error::OutOfRange("confidence"));
+        if !(self.confident_error_rate > 0.0 && self.confident_error_rate < 0.5) {
+            return Err(Error::OutOfRange("confident_error_rate"));
         }
         if self.hold_samples == 0 {
             return Err(Error::NonPositive("hold_samples"));

@@ -335,15 +335,19 @@ fn settings_fields() {
         );
     }
     accepted("model_sigma = 0", |p| p.settings.model_sigma = 0.0);
-    for v in [NAN, INF, -INF, 0.0, -0.5, 0.5, 1.0, 1.5] {
+    for v in [NAN, INF, -INF, 0.0, -0.01, 0.5, 0.6, 1.0, 1.5] {
         expect(
-            &format!("confidence = {v}"),
-            Error::OutOfRange("confidence"),
-            |p| p.settings.confidence = v,
+            &format!("confident_error_rate = {v}"),
+            Error::OutOfRange("confident_error_rate"),
+            |p| p.settings.confident_error_rate = v,
         );
     }
-    accepted("confidence = 0.51", |p| p.settings.confidence = 0.51);
-    accepted("confidence = 0.999", |p| p.settings.confidence = 0.999);
+    accepted("confident_error_rate = 0.49", |p| {
+        p.settings.confident_error_rate = 0.49
+    });
+    accepted("confident_error_rate = 1e-6", |p| {
+        p.settings.confident_error_rate = 1e-6
+    });
     expect(
         "hold_samples = 0",
         Error::NonPositive("hold_samples"),

@@ -1052,7 +1052,7 @@ fn settings_field() -> impl Strategy<Value = Settings> {
             prop_oneof![3 => Just(0.03f32), 1 => field(1e-4, 1.0)],
         ),
         (
-            prop_oneof![3 => 0.51f32..0.999, 1 => field(0.5, 1.0)],
+            prop_oneof![3 => 0.001f32..0.49, 1 => field(0.0, 0.5)],
             field(1.0, 10.0),
             prop_oneof![3 => Just(0.05f32), 1 => field(1e-3, 1.0)],
         ),
@@ -1066,7 +1066,7 @@ fn settings_field() -> impl Strategy<Value = Settings> {
                 baseline_tau_s: tau,
                 stuck_samples: stuck,
                 model_sigma: model,
-                confidence: conf,
+                confident_error_rate: conf,
                 out_sigmas: out,
                 separability_grid: grid,
                 shape_tolerance: shape,

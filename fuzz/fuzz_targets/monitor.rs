@@ -173,7 +173,7 @@ impl Bytes<'_> {
             baseline_tau_s: self.f32_in(1e-4, 1.0),
             stuck_samples: small(self, d.stuck_samples),
             model_sigma: self.f32_in(1e-4, 0.5),
-            confidence: self.f32_in(0.51, 0.999),
+            confident_error_rate: self.f32_in(0.001, 0.49),
             out_sigmas: self.f32_in(1.0, 10.0),
             shape_tolerance: self.f32_in(0.01, 1.0),
             contact: coalshock::ContactCalibration {

@@ -109,7 +109,7 @@ impl ClassModel {
     }
 
     /// Prior density of `y = ln u` (0 outside the range).
-    fn speed_density(&self, y: f64) -> f64 {
+    pub fn speed_density(&self, y: f64) -> f64 {
         let (y0, y1) = self.ln_speed;
         if y < y0 || y > y1 {
             return 0.0;
@@ -182,6 +182,31 @@ impl ClassModel {
     }
 }
 
+/// The scene's classes as [`ClassModel`]s (f64, from the scene file).
+pub fn class_models(scene: &crate::scene::SceneFile) -> Vec<ClassModel> {
+    let plate = scene.plate.material();
+    scene
+        .classes
+        .iter()
+        .map(|c| {
+            let m = c.material.material();
+            let u = c.speed_range_m_s();
+            let beta = match c.speed {
+                crate::scene::SpeedSpec::Uniform(_) => 1.0,
+                crate::scene::SpeedSpec::DropHeight(_) => 2.0,
+            };
+            ClassModel::new(
+                crate::hertz64::effective_modulus_pa(&m, &plate),
+                m.density_kg_m3,
+                (c.radius_m.min, c.radius_m.max),
+                (u.min, u.max),
+                beta,
+                c.prior,
+            )
+        })
+        .collect()
+}
+
 /// The forced-choice (argmax posterior) class of an observation, from the exact noiseless
 /// densities (`noise = None`) or the noisy ones.
 pub fn decide(
@@ -241,7 +266,7 @@ pub fn bayes_accuracy(
 }
 
 /// Two independent standard normals by Box-Muller.
-fn gauss_pair(uniform: &mut impl FnMut() -> f64) -> (f64, f64) {
+pub(crate) fn gauss_pair(uniform: &mut impl FnMut() -> f64) -> (f64, f64) {
     let (a, b) = (uniform(), uniform());
     let r = (-2.0 * a.ln()).sqrt();
     let t = 2.0 * std::f64::consts::PI * b;
@@ -249,12 +274,12 @@ fn gauss_pair(uniform: &mut impl FnMut() -> f64) -> (f64, f64) {
 }
 
 /// Standard normal CDF.
-fn phi(x: f64) -> f64 {
+pub(crate) fn phi(x: f64) -> f64 {
     0.5 * libm::erfc(-x / std::f64::consts::SQRT_2)
 }
 
 /// 32-point Gauss-Legendre quadrature of `f` over `[a, b]`.
-fn gauss_legendre(a: f64, b: f64, f: impl Fn(f64) -> f64) -> f64 {
+pub(crate) fn gauss_legendre(a: f64, b: f64, f: impl Fn(f64) -> f64) -> f64 {
     let (half, mid) = (0.5 * (b - a), 0.5 * (b + a));
     GL32.iter()
         .map(|&(x, w)| w * (f(mid + half * x) + f(mid - half * x)))

@@ -150,7 +150,7 @@ pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
     set(&mut s.release_sigmas, o.release_sigmas);
     set(&mut s.baseline_tau_s, o.baseline_tau_s);
     set(&mut s.model_sigma, o.model_sigma);
-    set(&mut s.confidence, o.confidence);
+    set(&mut s.confident_error_rate, o.confident_error_rate);
     set(&mut s.out_sigmas, o.out_sigmas);
     set(&mut s.shape_tolerance, o.shape_tolerance);
     set(&mut s.spike_fraction, o.spike_fraction);
@@ -375,11 +375,11 @@ mod tests {
     #[test]
     fn kernel_refusals_are_typed() {
         let mut s = SceneFile::paper();
-        s.settings.confidence = Some(0.4);
+        s.settings.confident_error_rate = Some(0.6);
         assert_eq!(
             scene_to_kernel(&s),
             Err(ConvertError::Kernel(coalshock::Error::OutOfRange(
-                "confidence"
+                "confident_error_rate"
             )))
         );
         let mut s = SceneFile::paper();

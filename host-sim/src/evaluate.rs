@@ -79,14 +79,17 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+pub use crate::bayes::class_models;
 use crate::bayes::{ClassModel, FeatureNoise, bayes_accuracy, decide};
 use crate::convert::{
     ConvertError, measurement_from_kernel, scene_to_kernel_in, separability_from_kernel,
 };
-use crate::hertz64::{HertzImpact64, effective_modulus_pa};
+use crate::hertz64::HertzImpact64;
 use crate::mismatch::ChainMismatch;
 use crate::par::map_ordered;
-use crate::scene::{SceneError, SceneFile, SpeedSpec};
+use crate::reference::{ReferenceError, ReferenceLimit, ReferenceOptions, reference_limit};
+use crate::reliability::{Reliability, reliability};
+use crate::scene::{SceneError, SceneFile};
 use crate::stream::{StreamError, StreamOptions, generate_class, match_truth, replay_events};
 
 /// Default impacts per simulated stream.
@@ -121,6 +124,11 @@ pub struct EvalOptions {
     pub match_tolerance_samples: Option<u64>,
     /// How far the chain the kernel is given is off from the simulated one.
     pub chain_mismatch: ChainMismatch,
+    /// The reference limit's grid, draws and phases.
+    pub reference: ReferenceOptions,
+    /// The confident-error rate the user accepts, in `(0, 0.5)`, replacing the scene file's
+    /// `settings.confident_error_rate` (`None`: the file's, or the kernel's default 0.01).
+    pub confident_error_rate: Option<f64>,
 }
 
 impl Default for EvalOptions {
@@ -135,6 +143,8 @@ impl Default for EvalOptions {
             stream: StreamOptions::default(),
             match_tolerance_samples: None,
             chain_mismatch: ChainMismatch::default(),
+            reference: ReferenceOptions::default(),
+            confident_error_rate: None,
         }
     }
 }
@@ -151,6 +161,9 @@ pub enum EvalError {
     /// A stream could not be simulated.
     #[error(transparent)]
     Stream(#[from] StreamError),
+    /// The reference limit could not be computed.
+    #[error(transparent)]
+    Reference(#[from] ReferenceError),
     /// An option is out of range.
     #[error("evaluation option {field} {problem}")]
     Option {
@@ -344,12 +357,25 @@ pub struct Evaluation {
     pub missed_share: f64,
     /// Reports paired with no impact.
     pub spurious_reports: u64,
-    /// Bayes limit with [`Evaluation::noise`] (Monte Carlo, independent draws).
-    pub bayes_accuracy: f64,
+    /// The posterior a class needs for a `Class` verdict, `1 - confident_error_rate`.
+    pub confidence_threshold: f64,
+    /// The reference limit: physics and the scene's stated noise alone
+    /// ([`crate::reference`]).
+    pub reference: ReferenceLimit,
+    /// Kernel forced choice minus the reference limit (independent draws: the standard error
+    /// is `sqrt(se_kernel^2 + se_reference^2)`).
+    pub kernel_vs_reference: Paired,
+    /// Stated posterior against observed accuracy ([`crate::reliability`]), over the pulses
+    /// with a `Class` or `Ambiguous` verdict.
+    pub reliability: Reliability,
+    /// Diagnostic, tied to the kernel: the Bayes limit with the kernel's own measured feature
+    /// noise ([`Evaluation::noise`]; Monte Carlo, independent draws). A worse detector lowers
+    /// it; [`Evaluation::reference`] is the limit.
+    pub kernel_noise_bayes_accuracy: f64,
     /// Its standard error.
-    pub bayes_std_error: f64,
+    pub kernel_noise_bayes_std_error: f64,
     /// Draws behind it (all classes).
-    pub bayes_draws: usize,
+    pub kernel_noise_bayes_draws: usize,
     /// The kernel's own noiseless Bayes error of the scene (`Scene::separability`, a 48 x 48
     /// grid by default); `1 -` it is the noiseless ceiling the kernel announces.
     pub kernel_bayes_error: f64,
@@ -415,10 +441,18 @@ pub struct EvaluateArgs {
     /// The kernel's math backend.
     #[arg(long, value_enum, default_value_t = BackendChoice::Default)]
     pub backend: BackendChoice,
-    /// Monte Carlo draws per class of the Bayes limit (1 to 10^8).
+    /// Monte Carlo draws per class of the diagnostic Bayes limit at the kernel's noise (1 to
+    /// 10^8).
     #[arg(long, default_value_t = DEFAULT_BAYES_DRAWS_PER_CLASS,
           value_parser = crate::counts::bayes_draws_per_class)]
     pub bayes_draws: usize,
+    /// Monte Carlo draws per class of the reference limit.
+    #[arg(long, default_value_t = crate::reference::DEFAULT_DRAWS_PER_CLASS)]
+    pub reference_draws: usize,
+    /// The share of class verdicts allowed to be wrong, in (0, 0.5) (default: the scene
+    /// file's `settings.confident_error_rate`, else 0.01).
+    #[arg(long)]
+    pub confident_error_rate: Option<f64>,
     /// Relative error of every chain frequency the kernel is given (0.02: 2 % high); the
     /// simulation keeps the scene's.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -443,6 +477,11 @@ impl EvaluateArgs {
                 damping: self.chain_damping_error,
                 gain: self.chain_gain_error,
             },
+            reference: ReferenceOptions {
+                draws_per_class: self.reference_draws,
+                ..ReferenceOptions::default()
+            },
+            confident_error_rate: self.confident_error_rate,
             ..EvalOptions::default()
         }
     }
@@ -482,11 +521,15 @@ pub fn evaluate_with_progress<M: Backend + Send + Sync>(
     opts: &EvalOptions,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Evaluation, EvalError> {
+    let mut scene = scene.clone();
+    if let Some(rate) = opts.confident_error_rate {
+        scene.settings.confident_error_rate = Some(rate);
+    }
     scene.validate()?;
     if scene.classes.len() <= DEFAULT_CLASSES {
-        run::<DEFAULT_CLASSES, M>(scene, opts, progress)
+        run::<DEFAULT_CLASSES, M>(&scene, opts, progress)
     } else {
-        run::<MAX_CLASSES, M>(scene, opts, progress)
+        run::<MAX_CLASSES, M>(&scene, opts, progress)
     }
 }
 
@@ -504,6 +547,8 @@ struct Outcome {
     column: usize,
     /// Kernel forced choice.
     forced: Option<usize>,
+    /// The posterior the kernel stated for its best class (`Class` and `Ambiguous`).
+    posterior: Option<f64>,
     oracle: usize,
 }
 
@@ -534,31 +579,6 @@ fn mix(mut x: u64) -> u64 {
 /// Seed of stream `chunk` of class `class`.
 fn stream_seed(seed: u64, class: usize, chunk: usize) -> u64 {
     mix(seed ^ mix(((class as u64) << 40) ^ chunk as u64))
-}
-
-/// The scene's classes as [`ClassModel`]s (f64, from the scene file).
-pub fn class_models(scene: &SceneFile) -> Vec<ClassModel> {
-    let plate = scene.plate.material();
-    scene
-        .classes
-        .iter()
-        .map(|c| {
-            let m = c.material.material();
-            let u = c.speed_range_m_s();
-            let beta = match c.speed {
-                SpeedSpec::Uniform(_) => 1.0,
-                SpeedSpec::DropHeight(_) => 2.0,
-            };
-            ClassModel::new(
-                effective_modulus_pa(&m, &plate),
-                m.density_kg_m3,
-                (c.radius_m.min, c.radius_m.max),
-                (u.min, u.max),
-                beta,
-                c.prior,
-            )
-        })
-        .collect()
 }
 
 fn run<const N: usize, M: Backend + Send + Sync>(
@@ -660,6 +680,7 @@ fn run<const N: usize, M: Backend + Send + Sync>(
         opts.bayes_draws_per_class,
         &mut uniform,
     );
+    let reference = reference_limit(scene, &opts.reference, opts.seed)?;
 
     // Per class counts and paired indicators.
     let priors = scene.class_probabilities();
@@ -794,9 +815,19 @@ fn run<const N: usize, M: Backend + Send + Sync>(
         spurious_reports: spurious,
         equaliser_noise_gain: kernel_scene.equaliser().noise_gain() as f64,
         chain_mismatch: [m.frequency, m.damping, m.gain],
-        bayes_accuracy: bayes.accuracy,
-        bayes_std_error: bayes.std_error,
-        bayes_draws: bayes.n,
+        confidence_threshold: kernel_scene.settings().confidence_threshold() as f64,
+        kernel_vs_reference: Paired {
+            difference: forced_choice_accuracy - reference.accuracy,
+            std_error: forced_choice_std_error.hypot(reference.std_error),
+        },
+        reference,
+        reliability: reliability(outcomes.iter().filter_map(|o| {
+            let w = priors[o.class] / opts.n_per_class as f64;
+            o.posterior.map(|p| (p, o.forced == Some(o.class), w))
+        })),
+        kernel_noise_bayes_accuracy: bayes.accuracy,
+        kernel_noise_bayes_std_error: bayes.std_error,
+        kernel_noise_bayes_draws: bayes.n,
         kernel_bayes_error: separability_from_kernel(&kernel_scene.separability()).1,
         oracle_accuracy: weighted(&|c| c.oracle_right),
         bayes_on_measured_accuracy: weighted(&|c| c.bayes_measured_right),
@@ -890,10 +921,17 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
             measured: None,
             column: col_miss,
             forced: None,
+            posterior: None,
             oracle,
         };
         if let Some(r) = rep.map(|i| &reports[i]) {
             o.forced = r.verdict.forced_choice().map(usize::from);
+            o.posterior = match r.verdict {
+                Verdict::Class { posterior, .. } | Verdict::Ambiguous { posterior, .. } => {
+                    Some(posterior as f64)
+                }
+                _ => None,
+            };
             o.column = match r.verdict {
                 Verdict::Class { class, .. } => class as usize,
                 Verdict::Ambiguous { .. } => col_amb,
@@ -1086,13 +1124,14 @@ impl Evaluation {
             "  the kernel's own sigma: F {:.4}, t_c {:.4} (mean over its measurements)",
             n.kernel_sigma_ln_force, n.kernel_sigma_ln_duration
         );
-        let _ = writeln!(s, "\nreferences (f64, independent of the kernel)");
+        s += &self.reference_table();
+        let _ = writeln!(s, "\ndiagnostics (f64, at the kernel's measured noise)");
         let _ = writeln!(
             s,
-            "  Bayes limit, noise as above {} +- {:.3} % ({} draws)",
-            pct(self.bayes_accuracy),
-            100.0 * self.bayes_std_error,
-            self.bayes_draws
+            "  Bayes at the kernel's noise {} +- {:.3} % ({} draws)",
+            pct(self.kernel_noise_bayes_accuracy),
+            100.0 * self.kernel_noise_bayes_std_error,
+            self.kernel_noise_bayes_draws
         );
         let _ = writeln!(
             s,
@@ -1147,5 +1186,34 @@ impl Evaluation {
             self.samples_fed, self.pulses_detected, self.kernel_seconds, self.kernel_ns_per_sample
         );
         s
+    }
+}
+
+impl Evaluation {
+    /// The reference limit, the kernel against it, and the reliability table, as text.
+    fn reference_table(&self) -> String {
+        let r = &self.reference;
+        let d = &self.kernel_vs_reference;
+        format!(
+            "\nreference limit (physics and the scene's stated noise, independent of the kernel)\n\
+             \x20 reference limit             {:7.3} % +- {:.3} % ({} draws, {} features, \
+             Cramer-Rao sigma ln F {:.4}, ln t_c {:.4})\n\
+             \x20 noiseless ceiling           {:7.3} % +- {:.3} %\n\
+             \x20 kernel - reference          {:+7.3} pp +- {:.3} pp\n\
+             \nreliability (confidence threshold {:.4}: confident errors at most {:.2} %)\n{}",
+            100.0 * r.accuracy,
+            100.0 * r.std_error,
+            r.draws,
+            r.features,
+            r.mean_sigma_ln_force,
+            r.mean_sigma_ln_duration,
+            100.0 * r.noiseless_accuracy,
+            100.0 * r.noiseless_std_error,
+            100.0 * d.difference,
+            100.0 * d.std_error,
+            self.confidence_threshold,
+            100.0 * (1.0 - self.confidence_threshold),
+            self.reliability.table()
+        )
     }
 }

@@ -160,7 +160,7 @@ fn settings(out: &mut String, s: &Settings) {
         baseline_tau_s,
         stuck_samples,
         model_sigma,
-        confidence,
+        confident_error_rate,
         out_sigmas,
         separability_grid,
         shape_tolerance,
@@ -178,7 +178,11 @@ fn settings(out: &mut String, s: &Settings) {
     float("release_sigmas", release_sigmas, d.release_sigmas);
     float("baseline_tau_s", baseline_tau_s, d.baseline_tau_s);
     float("model_sigma", model_sigma, d.model_sigma);
-    float("confidence", confidence, d.confidence);
+    float(
+        "confident_error_rate",
+        confident_error_rate,
+        d.confident_error_rate,
+    );
     float("out_sigmas", out_sigmas, d.out_sigmas);
     float("shape_tolerance", shape_tolerance, d.shape_tolerance);
     float("spike_fraction", spike_fraction, d.spike_fraction);
@@ -471,7 +475,11 @@ mod tests {
                 ("release_sigmas", st.release_sigmas, d.release_sigmas),
                 ("baseline_tau_s", st.baseline_tau_s, d.baseline_tau_s),
                 ("model_sigma", st.model_sigma, d.model_sigma),
-                ("confidence", st.confidence, d.confidence),
+                (
+                    "confident_error_rate",
+                    st.confident_error_rate,
+                    d.confident_error_rate,
+                ),
                 ("out_sigmas", st.out_sigmas, d.out_sigmas),
                 ("shape_tolerance", st.shape_tolerance, d.shape_tolerance),
                 ("spike_fraction", st.spike_fraction, d.spike_fraction),
@@ -519,7 +527,7 @@ mod tests {
     #[test]
     fn a_refused_scene_exports_nothing() {
         let mut s = SceneFile::paper();
-        s.settings.confidence = Some(0.4);
+        s.settings.confident_error_rate = Some(0.6);
         assert!(scene_source(&s, "x.toml").is_err());
     }
 }

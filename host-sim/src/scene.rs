@@ -31,7 +31,7 @@
 //! # [[sensor.beam_modes]]  frequency_hz = 180.0, damping_ratio = 0.02, gain = 0.1
 //!
 //! [settings]                          # optional, any subset of the kernel's Settings
-//! confidence = 0.9
+//! confident_error_rate = 0.01       # share of class verdicts allowed to be wrong
 //! ```
 //!
 //! [`load`] reads, parses and checks a file; every error names the file, and the field or the
@@ -872,9 +872,10 @@ pub struct SettingsOverrides {
     /// Model tolerance in log units.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_sigma: Option<f64>,
-    /// Posterior needed for a class verdict, in (0.5, 1).
+    /// Share of class verdicts allowed to be wrong, in (0, 0.5): a class is reported when
+    /// its posterior reaches `1 - confident_error_rate` (kernel default 0.01).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub confidence: Option<f64>,
+    pub confident_error_rate: Option<f64>,
     /// Standardised distance beyond which a pulse is out of every envelope.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub out_sigmas: Option<f64>,
@@ -1039,12 +1040,25 @@ impl SceneFile {
             ("settings.release_sigmas", self.settings.release_sigmas),
             ("settings.baseline_tau_s", self.settings.baseline_tau_s),
             ("settings.model_sigma", self.settings.model_sigma),
-            ("settings.confidence", self.settings.confidence),
+            (
+                "settings.confident_error_rate",
+                self.settings.confident_error_rate,
+            ),
             ("settings.out_sigmas", self.settings.out_sigmas),
         ] {
             if let Some(v) = v {
                 finite(name, v)?;
             }
+        }
+        if let Some(v) = self.settings.confident_error_rate
+            && !(v > 0.0 && v < 0.5)
+        {
+            return Err(SceneError::invalid(
+                "settings.confident_error_rate",
+                format!(
+                    "must be in (0, 0.5), the share of class verdicts allowed to be wrong (got {v})"
+                ),
+            ));
         }
         Ok(())
     }

@@ -694,7 +694,7 @@ fn accuracy_of<M: Backend + Send + Sync>(
         forced_choice: e.forced_choice_accuracy,
         coverage: e.coverage,
         confident_error_rate: e.confident_error_rate,
-        bayes_accuracy: e.bayes_accuracy,
+        bayes_accuracy: e.kernel_noise_bayes_accuracy,
         oracle_accuracy: e.oracle_accuracy,
         samples_fed: e.samples_fed as f64,
         pulses_detected: e.pulses_detected as f64,
