@@ -1052,7 +1052,7 @@ fn settings_field() -> impl Strategy<Value = Settings> {
             prop_oneof![3 => Just(0.03f32), 1 => field(1e-4, 1.0)],
         ),
         (
-            prop_oneof![3 => 0.001f32..0.49, 1 => field(0.0, 0.5)],
+            prop_oneof![3 => 0.001f32..0.49, 1 => field(1e-4, 0.5)],
             field(1.0, 10.0),
             prop_oneof![3 => Just(0.05f32), 1 => field(1e-3, 1.0)],
         ),

@@ -52,7 +52,7 @@ use crate::sensor::{ForcePulse, PulseShape, Sensor};
 pub const DEFAULT_GRID: usize = 20;
 
 /// Default Monte Carlo draws per class.
-pub const DEFAULT_DRAWS_PER_CLASS: usize = 20_000;
+pub const DEFAULT_DRAWS_PER_CLASS: usize = 50_000;
 
 /// Default onset phases the Cramér-Rao bound is averaged over.
 pub const DEFAULT_PHASES: usize = 4;
