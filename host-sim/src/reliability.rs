@@ -153,6 +153,7 @@ mod tests {
         assert!((r.calibration_error_mean - 0.05 * 300.0 / 700.0).abs() < 1e-12);
         // Weights: a class weighted 3 times as much moves the observed share.
         let r = reliability([(0.7, true, 3.0), (0.7, false, 1.0)]);
-        assert!((r.bins[2].observed - 0.75).abs() < 1e-12);
+        assert_eq!(r.bins[3].lower, 0.7);
+        assert!((r.bins[3].observed - 0.75).abs() < 1e-12);
     }
 }
