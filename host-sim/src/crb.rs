@@ -54,6 +54,8 @@ pub fn fisher(derivatives: &[Vec<f64>], variance: f64) -> Vec<Vec<f64>> {
 
 /// The inverse of a symmetric positive definite matrix by Cholesky (`None` when it is not
 /// positive definite to working precision).
+// Triangular factorisation and solves read best with their indices.
+#[allow(clippy::needless_range_loop)]
 pub fn invert_spd(m: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     let n = m.len();
     // L L^T = m.

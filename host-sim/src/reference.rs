@@ -347,7 +347,7 @@ impl ClassMap {
         let sy = syy.sqrt();
         let lo = y0.max(my - 8.0 * sy);
         let hi = y1.min(my + 8.0 * sy);
-        if !(lo < hi) {
+        if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
             return 0.0;
         }
         // x given y: mean mx + sxy / syy (y - my), variance sxx - sxy^2 / syy.

@@ -57,7 +57,7 @@ fn elastic_reference_agrees_with_the_closed_form_bayes_integral() {
         let mut stream = uniform_stream(7);
         let mut calls = 0usize;
         let mut skipping = || {
-            if calls > 0 && calls % 2 == 0 {
+            if calls > 0 && calls.is_multiple_of(2) {
                 stream();
                 stream();
             }
@@ -149,8 +149,8 @@ fn damped_map_follows_the_integrator_and_the_bound_between_grid_points() {
                 },
             };
             let crb = phase_averaged_crb(&sensor, &pulse, opts.phases).unwrap();
-            for k in 0..2 {
-                worst_s = worst_s.max((l.covariance[k].sqrt() / crb[k].sqrt()).ln().abs());
+            for (bound, direct) in l.covariance.iter().zip(&crb).take(2) {
+                worst_s = worst_s.max((bound.sqrt() / direct.sqrt()).ln().abs());
             }
         }
     }
