@@ -5,7 +5,7 @@
 use host_sim::bayes::{FeatureNoise, bayes_accuracy, class_models};
 use host_sim::crb::phase_averaged_crb;
 use host_sim::impact::{ImpactSpec, simulate};
-use host_sim::reference::{ReferenceOptions, class_maps, reference_accuracy};
+use host_sim::reference::{ClassMap, ReferenceOptions, class_maps, reference_accuracy};
 use host_sim::scene::{ContactLaw, SceneFile};
 use host_sim::sensor::{ForcePulse, PulseShape, Sensor};
 use rand::{Rng, SeedableRng};
@@ -14,6 +14,33 @@ use rand_chacha::ChaCha8Rng;
 fn uniform_stream(seed: u64) -> impl FnMut() -> f64 {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     move || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+}
+
+/// Two constant noises of the features: wide and correlated, narrow and anti-correlated.
+const NOISES: [FeatureNoise; 2] = [
+    FeatureNoise {
+        sigma_ln_force: 0.05,
+        sigma_ln_duration: 0.03,
+        correlation: 0.3,
+    },
+    FeatureNoise {
+        sigma_ln_force: 0.01,
+        sigma_ln_duration: 0.02,
+        correlation: -0.5,
+    },
+];
+
+/// The scene's class maps with `noise` in place of the bound.
+fn constant_noise_maps(
+    scene: &SceneFile,
+    opts: &ReferenceOptions,
+    noise: &FeatureNoise,
+) -> Vec<ClassMap> {
+    class_maps(scene, opts)
+        .unwrap()
+        .into_iter()
+        .map(|m| m.with_constant_noise(noise))
+        .collect()
 }
 
 #[test]
@@ -28,27 +55,12 @@ fn elastic_reference_agrees_with_the_closed_form_bayes_integral() {
         ..ReferenceOptions::default()
     };
     let n = 20_000;
-    for noise in [
-        FeatureNoise {
-            sigma_ln_force: 0.05,
-            sigma_ln_duration: 0.03,
-            correlation: 0.3,
-        },
-        FeatureNoise {
-            sigma_ln_force: 0.01,
-            sigma_ln_duration: 0.02,
-            correlation: -0.5,
-        },
-    ] {
-        let maps: Vec<_> = class_maps(&scene, &opts)
-            .unwrap()
-            .into_iter()
-            .map(|m| m.with_constant_noise(&noise))
-            .collect();
+    for noise in &NOISES {
+        let maps = constant_noise_maps(&scene, &opts, noise);
         let r = reference_accuracy(&maps, n, &mut uniform_stream(7));
         let b = bayes_accuracy(
             &class_models(&scene),
-            Some(&noise),
+            Some(noise),
             n,
             &mut uniform_stream(7),
         );
@@ -76,20 +88,11 @@ fn elastic_reference_agrees_with_the_closed_form_bayes_integral() {
         assert!(r.noiseless_accuracy - r.accuracy > 3.0 * r.std_error);
     }
     // And on independent draws, within the Monte Carlo error.
-    let noise = FeatureNoise {
-        sigma_ln_force: 0.05,
-        sigma_ln_duration: 0.03,
-        correlation: 0.3,
-    };
-    let maps: Vec<_> = class_maps(&scene, &opts)
-        .unwrap()
-        .into_iter()
-        .map(|m| m.with_constant_noise(&noise))
-        .collect();
+    let maps = constant_noise_maps(&scene, &opts, &NOISES[0]);
     let r = reference_accuracy(&maps, n, &mut uniform_stream(1));
     let b = bayes_accuracy(
         &class_models(&scene),
-        Some(&noise),
+        Some(&NOISES[0]),
         n,
         &mut uniform_stream(2),
     );
