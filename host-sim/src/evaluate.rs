@@ -1,8 +1,8 @@
 //! End-to-end evaluation of the kernel on a scene: impacts drawn from the scene's priors,
 //! integrated in `f64`, sent through the sensor chain, fed as integer samples to the kernel's
 //! `Monitor` (the node's `f32` code, math backend `M`), and its reports scored against the
-//! truth and against Bayes-optimal decisions computed here in `f64`, independently of the
-//! kernel.
+//! truth, against the scene's reference limit ([`crate::reference`]: physics and the stated
+//! noise alone) and against Bayes-optimal decisions computed here in `f64`.
 //!
 //! # What is drawn
 //!
@@ -30,13 +30,24 @@
 //!   (argmax posterior), the nearest class of `OutOfEnvelope` (the kernel always names one);
 //!   `Rejected` gives no class and counts as wrong, and so does a missed impact.
 //! - **Coverage**: decided pulses (a `Class` verdict) over paired pulses.
-//! - **Confident-error rate**: wrong `Class` verdicts over decided pulses.
+//! - **Confident-error rate**: wrong `Class` verdicts over decided pulses; the kernel reports
+//!   a class when its posterior reaches `1 - confident_error_rate` (the scene's setting, or
+//!   [`EvalOptions::confident_error_rate`]).
+//! - **Reliability**: the posteriors the kernel states against the accuracy observed, by bin
+//!   ([`crate::reliability`]).
 //!
 //! Rates are prior-weighted: class `c` contributes its counts times `p_c / n_per_class`
 //! (`p_c` the normalised prior), as if impacts arrived in the proportions of the priors. With
 //! equal priors they are plain shares of the counts.
 //!
-//! # References, all computed in `f64` from the scene file ([`crate::bayes`])
+//! # The reference limit
+//!
+//! [`crate::reference::reference_limit`]: the best forced choice from the exact features of
+//! the scene's contact law measured at the Cramér-Rao bound of the scene's sampled pulse,
+//! chain and noise, on independent draws; `kernel_vs_reference` is the kernel's forced choice
+//! minus it.
+//!
+//! # Diagnostics, all computed in `f64` from the scene file ([`crate::bayes`])
 //!
 //! - **Oracle**: the Bayes decision (argmax prior x noiseless class density) on the exact
 //!   closed-form Hertz `(F_max, t_c)` of each drawn `(R, u)`: the ceiling of any classifier
@@ -51,9 +62,10 @@
 //!   pessimistic when the noise matters. The error is also split into the detector's part
 //!   (measured against the simulated pulse) and the contact law's (simulated pulse against
 //!   Hertz), see [`NoiseEstimate`].
-//! - **Bayes limit**: [`crate::bayes::bayes_accuracy`] with that noise, on
+//! - **Bayes at the kernel's noise**: [`crate::bayes::bayes_accuracy`] with that noise, on
 //!   `bayes_draws_per_class` independent draws per class: the best forced-choice accuracy
-//!   from Hertz features measured with unbiased Gaussian noise of that size.
+//!   from Hertz features measured with unbiased Gaussian noise of the kernel's size (tied to
+//!   the kernel: a worse detector lowers it).
 //! - **Bayes on measured**: the same Bayes decision applied to the kernel's measured
 //!   `(F, t_c)` of the same pulses (missed and rejected pulses wrong), and once more with the
 //!   mean bias subtracted first. Paired with the kernel's forced choice on the same impacts,

@@ -3,7 +3,7 @@
 //! - `host-sim paper`: the paper's scene, Table 3 and Figs 2-11 (see `PAPER.md`);
 //! - `host-sim impact`: one impact, or a batch of impacts from a CSV file;
 //! - `host-sim stream`: a labelled sample stream (`.bin` + `.truth.csv`, see `FORMATS.md`);
-//! - `host-sim evaluate`: the kernel scored on a scene against the Bayes limit (see
+//! - `host-sim evaluate`: the kernel scored on a scene against its reference limit (see
 //!   `host_sim::evaluate`, JSON fields in `FORMATS.md`);
 //! - `host-sim caving`: caving rounds, the window closed at the kernel's flow alarm, against
 //!   the same detector on exact features, the true labels, a clairvoyant and the naive rule
@@ -51,7 +51,8 @@ enum Command {
     /// Generate a labelled sample stream: OUT.bin (little-endian i16) and OUT.truth.csv.
     Stream(StreamArgs),
     /// Evaluate the kernel on N impacts per class: confusion matrix, forced-choice accuracy,
-    /// coverage, confident errors, against the Bayes limit and the oracle.
+    /// coverage, confident errors, reliability of its posteriors, against the reference limit
+    /// and the oracle.
     Evaluate(host_sim::evaluate::EvaluateArgs),
     /// Measure what each knob buys and costs (math backend, separability grid, integrator,
     /// sample rate): a markdown table, CSV files and SVG Pareto plots.
