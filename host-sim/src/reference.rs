@@ -6,7 +6,8 @@
 //!
 //! 1. **Noiseless features.** For every class, a grid of `grid x grid` impacts spans its
 //!    prior box in `z = (x, y) = (ln R, ln u)`. Each is integrated with the scene's contact
-//!    law by host-sim's integrator ([`crate::impact::simulate`]): `F_max` is the peak force,
+//!    law (a class that states a yield pressure: Thornton's law, [`SceneFile::class_law`]) by
+//!    host-sim's integrator ([`crate::impact::simulate`]): `F_max` is the peak force,
 //!    `t_c` the pulse's duration (first contact to the first zero of the force after its
 //!    peak), as the stream's truth defines them. For undamped Hertz the features are the
 //!    closed forms `F_max = k delta_max^(3/2)`, `t_c = 2.9432751843 delta_max / u`. Damped
@@ -45,7 +46,8 @@ use crate::crb::{FeatureCovariance, phase_averaged_crb};
 use crate::hertz64::HertzImpact64;
 use crate::impact::{ImpactSpec, simulate};
 use crate::integrate::SimError;
-use crate::scene::{ContactLaw, SceneError, SceneFile};
+use crate::law_spec::LawSpec;
+use crate::scene::{SceneError, SceneFile};
 use crate::sensor::{ForcePulse, PulseShape, Sensor};
 
 /// Default grid points per axis of a class's `(ln R, ln u)` box.
@@ -142,7 +144,8 @@ pub struct ReferenceLimit {
     pub mean_sigma_ln_force: f64,
     /// Mean bound standard deviation of `ln t_c` over the draws.
     pub mean_sigma_ln_duration: f64,
-    /// `"hertz_closed_form"` (undamped Hertz) or `"integrator"` (every other law).
+    /// `"hertz_closed_form"` (undamped Hertz for every class) or `"integrator"` (any class
+    /// under another law, a yielding class included).
     pub features: &'static str,
     /// Grid points per axis.
     pub grid: usize,
@@ -191,6 +194,15 @@ impl ClassMap {
         let model = class_models(scene)[class];
         let c = &scene.classes[class];
         let (material, plate) = (c.material.material(), scene.plate.material());
+        let law = scene
+            .class_law(class)
+            .map_err(|error| ReferenceError::Simulation {
+                class: c.name.clone(),
+                radius_m: c.radius_m.min,
+                speed_m_s: c.speed_range_m_s().min,
+                error,
+            })?;
+        let closed_form = matches!(law, LawSpec::Hertz);
         let n = opts.grid;
         let mut nodes = Vec::with_capacity(n * n);
         for j in 0..n {
@@ -206,11 +218,11 @@ impl ClassMap {
                 let hertz =
                     HertzImpact64::new(&material, &plate, radius_m, speed_m_s).map_err(err)?;
                 let mut spec = ImpactSpec::new(material, plate, radius_m, speed_m_s);
-                spec.law = scene.contact.law_spec();
+                spec.law = law.clone();
                 let step_s = hertz.duration_s / RECORD_POINTS;
                 spec.record = Some(step_s);
                 let report = simulate(&spec).map_err(err)?;
-                let features = if scene.contact == ContactLaw::Hertz {
+                let features = if closed_form {
                     [hertz.peak_force_n.ln(), hertz.duration_s.ln()]
                 } else {
                     [report.peak_force_n.ln(), report.pulse_duration_s.ln()]
@@ -241,7 +253,7 @@ impl ClassMap {
             model,
             grid: n,
             phases: opts.phases,
-            features: if scene.contact == ContactLaw::Hertz {
+            features: if closed_form {
                 "hertz_closed_form"
             } else {
                 "integrator"
@@ -471,7 +483,11 @@ pub fn reference_accuracy(
         draws,
         mean_sigma_ln_force: sum_sf / draws as f64,
         mean_sigma_ln_duration: sum_st / draws as f64,
-        features: maps.first().map_or("", |m| m.features),
+        features: if maps.iter().all(|m| m.features == "hertz_closed_form") {
+            "hertz_closed_form"
+        } else {
+            "integrator"
+        },
         grid: maps.first().map_or(0, |m| m.grid),
         phases: maps.first().map_or(0, |m| m.phases),
     }
