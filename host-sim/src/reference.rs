@@ -218,7 +218,7 @@ impl ClassMap {
                 let hertz =
                     HertzImpact64::new(&material, &plate, radius_m, speed_m_s).map_err(err)?;
                 let mut spec = ImpactSpec::new(material, plate, radius_m, speed_m_s);
-                spec.law = law.clone();
+                spec.law = law;
                 let step_s = hertz.duration_s / RECORD_POINTS;
                 spec.record = Some(step_s);
                 let report = simulate(&spec).map_err(err)?;
@@ -426,14 +426,13 @@ pub fn class_maps(
 /// The Bayes-optimal class of observed features `f` among `maps` (largest prior times
 /// density).
 pub fn decide(maps: &[ClassMap], f: [f64; 2], noisy: bool) -> usize {
-    let mut best = (0usize, f64::NEG_INFINITY);
-    for (i, m) in maps.iter().enumerate() {
-        let score = m.model.prior * m.density(f, noisy);
-        if score > best.1 {
-            best = (i, score);
-        }
-    }
-    best.0
+    maps.iter()
+        .map(|m| m.model.prior * m.density(f, noisy))
+        .enumerate()
+        .fold((0, f64::NEG_INFINITY), |best, (i, score)| {
+            if score > best.1 { (i, score) } else { best }
+        })
+        .0
 }
 
 /// The Monte Carlo of the module docs, step 5, on `maps`, `draws_per_class` draws per class
