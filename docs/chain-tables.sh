@@ -16,12 +16,12 @@ d = json.load(sys.stdin)
 label, seed = sys.argv[1], sys.argv[2]
 pct = lambda k: "%.2f" % (100 * d[k])
 print("| %s | %s | %s | %s | %s | %s | %s | %s | %d |" % (label, seed,
-    pct("forced_choice_accuracy"), pct("bayes_accuracy"), pct("coverage"),
+    "%.2f" % (100 * d["forced_choice_accuracy"]), "%.2f" % (100 * d["reference"]["accuracy"]), pct("coverage"),
     pct("confident_error_rate"), pct("rejected_share"), pct("missed_share"),
     d["spurious_reports"]))
 ' "$scene ${*:-(chain right)}" "$seed"
 }
-echo "| scene, chain given | seed | forced choice (%) | Bayes limit (%) | coverage (%) | confident errors (%) | rejected (%) | missed (%) | spurious reports |"
+echo "| scene, chain given | seed | forced choice (%) | reference limit (%) | coverage (%) | confident errors (%) | rejected (%) | missed (%) | spurious reports |"
 echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
 for scene in tail_beam mems_chain piezo_chain; do
     for m in "" "--chain-frequency-error 0.02" "--chain-frequency-error -0.02" \
