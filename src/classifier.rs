@@ -180,7 +180,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let lf = M::ln(m.peak_force_n);
         let lt = M::ln(m.duration_s);
         let noise = NoiseXy::new::<M>(sf, st);
-        let wide = noise.with_chain_bias::<M>(self.chain_bias().bias_ln_force(lt));
+        let bias = self.chain_bias().bias_ln_force(lt);
+        let wide = noise.with_chain_bias::<M>(bias);
 
         let n = self.envelopes().len();
         let (mut nearest, mut nearest_d) = (0u8, f32::INFINITY);
@@ -196,6 +197,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             .zip(class_lls.iter_mut())
             .enumerate()
         {
+            // A yielding class carries the noise through its own map, at the pulse's point.
+            let (noise, wide) = env
+                .yield_noise::<M>((lf, lt), (sf, st), bias)
+                .unwrap_or((noise, wide));
             let d = env.outside_sigmas_squared(lf, lt, wide);
             if d < nearest_d {
                 nearest_d = d;
@@ -250,10 +255,11 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             .map(|e| e.invert::<M>(h.peak_force_n, h.duration_s))
     }
 
-    /// The undamped Hertz impact a measurement stands for: `F_max / force_ratio` and
+    /// The impact of the kernel's own model (undamped Hertz, or Thornton's undamped yield for a
+    /// class that states a yield pressure) a measurement stands for: `F_max / force_ratio` and
     /// `t_c / duration_ratio` of the scene's [`crate::ContactCalibration`], each also divided by
     /// the sampling correction at the pulse's samples per pulse (whose spread joins the
-    /// measurement's sigmas); the identity for an undamped contact.
+    /// measurement's sigmas); the identity for an undamped elastic contact.
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
         if c.sampled == SampledCalibration::NONE {

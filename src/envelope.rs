@@ -8,12 +8,18 @@
 //! the `(R, u)` the class would need:
 //! `y = (ln F - ln c_F - 2 (ln t - ln c_t)) / (8/5)`, `x = ln t - ln c_t + y/5`.
 //!
+//! A class whose contact yields bends the parallelogram by Thornton's ratios to the Hertz
+//! impact, functions of `ln u` alone ([`crate::yield_map`]): the same inverse with a table
+//! lookup for `y`, and the map's local Jacobian in place of `8/5`.
+//!
 //! Priors: `R` log-uniform on `[R0, R1]`; `u` with density `p(u) ~ u^(beta - 1)` on `[u0, u1]`
 //! (`beta = 1`: uniform speed; `beta = 2`: uniform drop height, `u = sqrt(2 g h)`).
 
 use crate::error::{Error, positive, representable};
 use crate::hertz::CONTACT_TIME_FACTOR;
 use crate::math::{self, Backend};
+use crate::thornton::yield_speed_in;
+use crate::yield_map::{Local, YieldMap};
 
 /// `|det|` of the map `(ln R, ln u) -> (ln F_max, ln t_c)`.
 pub const JACOBIAN: f32 = 1.6;
@@ -82,8 +88,12 @@ pub struct Envelope {
     pub speed_beta: f32,
     /// `ln` of the constant part of the prior density in `(ln F, ln t)`:
     /// `-ln(x1 - x0) - ln(8/5) + ln(beta / (e^(beta y1) (1 - e^(beta (y0 - y1)))))`
-    /// (`-ln(y1 - y0)` in place of the last term for `beta = 0`).
+    /// (`-ln(y1 - y0)` in place of the last term for `beta = 0`); for a yielding class the
+    /// density adds `ln(8/5 / h'(y))` at the point ([`Envelope::ln_density_excess`]).
     pub ln_normalizer: f32,
+    /// The yield map that bends the envelope, for a class whose contact yields; `None`: the
+    /// Hertz parallelogram.
+    pub yield_map: Option<YieldMap>,
 }
 
 /// Measurement noise carried from `(ln F_max, ln t_c)` into `(x, y) = (ln R, ln u)` as
@@ -120,6 +130,39 @@ impl NoiseXy {
             return self;
         }
         let (bx, by) = (0.625 * bias_ln_force, 1.875 * bias_ln_force);
+        Self {
+            sigma_x: clamp_sigma(M::sqrt(self.sigma_x * self.sigma_x + bx * bx)),
+            sigma_y: clamp_sigma(M::sqrt(self.sigma_y * self.sigma_y + by * by)),
+        }
+    }
+}
+
+impl NoiseXy {
+    /// From the standard deviations of `ln F_max` and `ln t_c` through a yielding class's map
+    /// at a point with slopes `l` ([`Local`]): with `j = h'(y)`, `g = 1/5 - phi_t'(y)`,
+    /// `dy = (d ln F - 2 d ln t) / j` and `dx = (g / j) d ln F + (1 - 2 g / j) d ln t`, so
+    /// `sigma_y^2 = (sF^2 + 4 sT^2) / j^2`, `sigma_x^2 = (g/j)^2 sF^2 + (1 - 2g/j)^2 sT^2`
+    /// ([`NoiseXy::new`] for `j = 8/5`, `g = 1/5`).
+    pub fn through<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32, l: Local) -> Self {
+        let (j, g) = (l.jacobian, 0.2 - l.phi_t_slope);
+        let (cf, ct) = (g / j, 1.0 - 2.0 * g / j);
+        let f2 = sigma_ln_force * sigma_ln_force;
+        let t2 = sigma_ln_duration * sigma_ln_duration;
+        Self {
+            sigma_x: clamp_sigma(M::sqrt(cf * cf * f2 + ct * ct * t2)),
+            sigma_y: clamp_sigma(M::sqrt((f2 + 4.0 * t2) / (j * j))),
+        }
+    }
+
+    /// [`NoiseXy::with_chain_bias`] through a yielding class's map: the bias `(b, -b)` of
+    /// `(ln F_max, ln t_c)` moves `(ln R, ln u)` by `((3 g / j - 1) b, 3 b / j)`
+    /// (`(-5/8 b, 15/8 b)` for Hertz).
+    pub fn with_bias_through<M: Backend>(self, bias_ln_force: f32, l: Local) -> Self {
+        if bias_ln_force <= 0.0 || !bias_ln_force.is_finite() {
+            return self;
+        }
+        let (j, g) = (l.jacobian, 0.2 - l.phi_t_slope);
+        let (bx, by) = ((3.0 * g / j - 1.0) * bias_ln_force, 3.0 * bias_ln_force / j);
         Self {
             sigma_x: clamp_sigma(M::sqrt(self.sigma_x * self.sigma_x + bx * bx)),
             sigma_y: clamp_sigma(M::sqrt(self.sigma_y * self.sigma_y + by * by)),
@@ -186,21 +229,80 @@ impl Envelope {
             ln_speed: (y0, y1),
             speed_beta,
             ln_normalizer: -M::ln(x1 - x0) - M::ln(JACOBIAN) + ln_py,
+            yield_map: None,
         };
         if !env.ln_normalizer.is_finite() {
             return Err(Error::Unrepresentable("prior density"));
         }
-        // Every corner must give a peak force and duration that f32 carries.
-        for (x, y) in env.corners() {
-            let (lf, lt) = env.forward(x, y);
-            representable(M::exp(lf), "peak force")?;
-            representable(M::exp(lt), "contact duration")?;
-        }
+        env.check_corners::<M>()?;
         Ok(env)
     }
 
-    /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s.
+    /// The envelope bent by Thornton's yield at the limiting contact pressure
+    /// `yield_pressure_pa` (Pa), for the same material (`effective_modulus_pa`,
+    /// `density_kg_m3`) as [`Envelope::new`]: its [`YieldMap`] over the class's speed range
+    /// from the yield speed `V_y = 1.5605 (p_y^5 / (E*^4 rho))^(1/2)`.
+    pub fn yielding<M: Backend>(
+        mut self,
+        effective_modulus_pa: f32,
+        density_kg_m3: f32,
+        yield_pressure_pa: f32,
+    ) -> Result<Self, Error> {
+        let v_y = yield_speed_in::<M>(effective_modulus_pa, density_kg_m3, yield_pressure_pa)?;
+        self.yield_map = Some(YieldMap::new::<M>(v_y, self.ln_speed)?);
+        self.check_corners::<M>()?;
+        Ok(self)
+    }
+
+    /// Every corner must give a peak force and duration that f32 carries.
+    fn check_corners<M: Backend>(&self) -> Result<(), Error> {
+        for (x, y) in self.corners() {
+            let (lf, lt) = self.forward(x, y);
+            representable(M::exp(lf), "peak force")?;
+            representable(M::exp(lt), "contact duration")?;
+        }
+        Ok(())
+    }
+
+    /// The yield map's values and slopes at `y = ln u`, or `None` for a Hertz envelope.
+    pub fn local(&self, y: f32) -> Option<Local> {
+        self.yield_map.map(|m| m.local(y))
+    }
+
+    /// `ln(8/5 / h'(y))`: what a yielding class's density at `y = ln u` adds to
+    /// [`Envelope::ln_normalizer`] (0 for a Hertz envelope).
+    pub fn ln_density_excess<M: Backend>(&self, y: f32) -> f32 {
+        match self.local(y) {
+            Some(l) => M::ln(JACOBIAN / l.jacobian),
+            None => 0.0,
+        }
+    }
+
+    /// The measurement noise `(sigma_ln_force, sigma_ln_duration)` carried into this yielding
+    /// class's `(ln R, ln u)` at the point `(ln_force, ln_duration)` maps to, and the same
+    /// widened by a chain's bias `bias_ln_force` ([`NoiseXy::through`],
+    /// [`NoiseXy::with_bias_through`]); `None` for a Hertz envelope (the caller's
+    /// [`NoiseXy::new`] holds).
+    pub fn yield_noise<M: Backend>(
+        &self,
+        (ln_force, ln_duration): (f32, f32),
+        (sigma_ln_force, sigma_ln_duration): (f32, f32),
+        bias_ln_force: f32,
+    ) -> Option<(NoiseXy, NoiseXy)> {
+        let (_, y) = self.invert_ln(ln_force, ln_duration);
+        let l = self.local(y)?;
+        let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, l);
+        Some((noise, noise.with_bias_through::<M>(bias_ln_force, l)))
+    }
+
+    /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s; for a yielding class
+    /// `ln t_c = ln c_t + x - y/5 + phi_t(y)`, `ln F_max = ln c_F - 2 ln c_t + 2 ln t_c + h(y)`.
     pub fn forward(&self, x: f32, y: f32) -> (f32, f32) {
+        if let Some(l) = self.local(y) {
+            let lt = self.ln_duration_coeff + x - 0.2 * y + l.phi_t;
+            let lf = self.ln_force_coeff - 2.0 * self.ln_duration_coeff + 2.0 * lt + l.h;
+            return (lf, lt);
+        }
         (
             self.ln_force_coeff + 2.0 * x + 1.2 * y,
             self.ln_duration_coeff + x - 0.2 * y,
@@ -208,9 +310,15 @@ impl Envelope {
     }
 
     /// `(ln R, ln u)` that gives `(ln F_max, ln t_c)` (the exact inverse of [`Self::forward`]).
+    /// For a yielding class `y` solves `h(y) = a - 2 b` on the map and
+    /// `x = b + y/5 - phi_t(y)`.
     pub fn invert_ln(&self, ln_force: f32, ln_duration: f32) -> (f32, f32) {
         let a = ln_force - self.ln_force_coeff;
         let b = ln_duration - self.ln_duration_coeff;
+        if let Some(m) = &self.yield_map {
+            let y = m.ln_speed_for(a - 2.0 * b);
+            return (b + 0.2 * y - m.local(y).phi_t, y);
+        }
         let y = (a - 2.0 * b) / JACOBIAN;
         (b + 0.2 * y, y)
     }
@@ -249,14 +357,16 @@ impl Envelope {
     }
 
     /// Noiseless prior density of the class at `(ln F_max, ln t_c)`:
-    /// `p(x) p(y) / 1.6` with `p(x) = 1 / (x1 - x0)` inside the box, 0 outside.
+    /// `p(x) p(y) / 1.6` with `p(x) = 1 / (x1 - x0)` inside the box, 0 outside (`/ h'(y)` for
+    /// a yielding class).
     pub fn density<M: Backend>(&self, ln_force: f32, ln_duration: f32) -> f32 {
         let (x, y) = self.invert_ln(ln_force, ln_duration);
         let (x0, x1) = self.ln_radius;
         if !(x0..=x1).contains(&x) {
             return 0.0;
         }
-        self.speed_density::<M>(y) / (x1 - x0) / JACOBIAN
+        let jacobian = self.local(y).map_or(JACOBIAN, |l| l.jacobian);
+        self.speed_density::<M>(y) / (x1 - x0) / jacobian
     }
 
     /// Log-likelihood of a noisy observation `(ln F_max, ln t_c)`: the class density
@@ -266,8 +376,9 @@ impl Envelope {
     ///      * beta e^(beta (y - y1) + beta^2 sy^2 / 2) / (1 - e^(beta (y0 - y1)))
     ///      * [Phi((y1 - y - beta sy^2)/sy) - Phi((y0 - y - beta sy^2)/sy)]`
     ///
-    /// (the constant factors are [`Envelope::ln_normalizer`]). `-inf` when the observation is so
-    /// far outside that f32 rounds the likelihood to zero.
+    /// (the constant factors are [`Envelope::ln_normalizer`]; a yielding class has `h'(y)` in
+    /// place of 1.6, and its `noise` from [`Envelope::yield_noise`]). `-inf` when the
+    /// observation is so far outside that f32 rounds the likelihood to zero.
     pub fn ln_likelihood<M: Backend>(
         &self,
         ln_force: f32,
@@ -285,7 +396,12 @@ impl Envelope {
         if ix <= 0.0 || iy <= 0.0 {
             return f32::NEG_INFINITY;
         }
-        M::ln(ix * iy) + self.ln_normalizer + b * y + 0.5 * b * shift
+        let ll = M::ln(ix * iy) + self.ln_normalizer + b * y + 0.5 * b * shift;
+        if self.yield_map.is_some() {
+            ll + self.ln_density_excess::<M>(y)
+        } else {
+            ll
+        }
     }
 
     /// Squared standardised distance of an observation outside the class's box:

@@ -24,6 +24,7 @@ pub mod math;
 pub mod monitor;
 pub mod scene;
 pub mod thornton;
+pub mod yield_map;
 
 pub use chain_bias::ChainBias;
 pub use classifier::{Measurement, RejectReason, Verdict};

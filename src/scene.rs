@@ -51,6 +51,10 @@ pub struct ParticleClass {
     pub speed: Speed,
     /// Prior weight of the class (relative share of impacts), `> 0`.
     pub prior: f32,
+    /// Limiting contact pressure `p_y` in Pa of Thornton's elastic-perfectly-plastic contact
+    /// (finite, `> 0`), if the class's contact yields: its envelope is then bent by
+    /// [`crate::yield_map`]; `None`: elastic Hertz contact.
+    pub yield_pressure_pa: Option<f32>,
 }
 
 impl ParticleClass {
@@ -68,6 +72,7 @@ impl ParticleClass {
             radius_m,
             speed,
             prior: 1.0,
+            yield_pressure_pa: None,
         }
     }
 }
@@ -465,14 +470,20 @@ impl<const N: usize, M: Backend> Scene<N, M> {
                     )
                 }
             };
-            let env = Envelope::new::<M>(e_eff, c.material.density_kg_m3, c.radius_m, speed, beta)?;
+            let rho = c.material.density_kg_m3;
+            let mut env = Envelope::new::<M>(e_eff, rho, c.radius_m, speed, beta)?;
             // Shortest pulse: smallest radius, highest speed; longest: the opposite.
-            let short =
-                hertz::impact_in::<M>(e_eff, c.material.density_kg_m3, c.radius_m.min, speed.max)?;
-            let long =
-                hertz::impact_in::<M>(e_eff, c.material.density_kg_m3, c.radius_m.max, speed.min)?;
-            shortest = shortest.min(short.duration_s);
-            longest = longest.max(long.duration_s);
+            let mut short = hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
+            let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
+            if let Some(p_y) = c.yield_pressure_pa {
+                env = env.yielding::<M>(e_eff, rho, positive(p_y, "yield_pressure_pa")?)?;
+                let (x0, x1) = env.ln_radius;
+                let (y0, y1) = env.ln_speed;
+                short = M::exp(env.forward(x0, y1).1);
+                long = M::exp(env.forward(x1, y0).1);
+            }
+            shortest = shortest.min(short);
+            longest = longest.max(long);
             let prior = positive(c.prior, "prior")?;
             // Capacity was checked above: these pushes cannot fail.
             let _ = envelopes.push(env);
@@ -634,7 +645,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             return (0.0, 0.0);
         };
         let (x0, x1) = env.ln_radius;
-        let own = *lp + env.ln_normalizer + env.speed_beta * y;
+        let own = *lp + env.ln_normalizer + env.speed_beta * y + env.ln_density_excess::<M>(y);
         let fa = env.forward(x0, y);
         let fb = env.forward(x1, y);
         let mut possible = Intervals::<N>::EMPTY;
@@ -652,8 +663,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             };
             possible.push(lo, hi);
             // Ties go to the lower index, as the classifier's argmax does.
-            let c0 = *lp2 + e2.ln_normalizer + e2.speed_beta * ya - own;
-            let c1 = e2.speed_beta * (yb - ya);
+            // A yielding class's density has `h'(y')` in place of 8/5 ([`Envelope::density`]).
+            let (ea, eb) = (e2.ln_density_excess::<M>(ya), e2.ln_density_excess::<M>(yb));
+            let c0 = *lp2 + e2.ln_normalizer + e2.speed_beta * ya + ea - own;
+            let c1 = e2.speed_beta * (yb - ya) + (eb - ea);
             if let Some((blo, bhi)) = beats(c0, c1, j < i, (lo, hi)) {
                 better.push(blo, bhi);
             }

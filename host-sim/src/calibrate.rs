@@ -6,6 +6,12 @@
 //! - the shape ratio `q = (E / (C_ENERGY F_peak^2)) / (A / (C_AREA F_peak))`, `E = integral F^2 dt`
 //!   (1 for the Hertz pulse).
 //!
+//! For a class whose contact yields (Thornton's law) the reference is the kernel's own model of
+//! it, Thornton's undamped closed forms `F*` and `t_c` ([`ThorntonImpact64`]) in place of
+//! Hertz's: the kernel's envelope already follows the yield, and the ratios are what is left,
+//! the detector's Hertz area and energy constants read on the flatter yielding pulse (its
+//! duration about 12 % long) and any damping.
+//!
 //! The pulse comes from the f64 integrator with the scene's law; `C_AREA` and `C_ENERGY` are the
 //! closed forms of the Hertz pulse (written here from their formulas, not taken from the
 //! kernel). For the restitution-parametrised laws the ratios depend on the restitution alone;
@@ -19,7 +25,9 @@ use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 use crate::hertz64::HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR;
 use crate::impact::{ImpactSpec, simulate};
 use crate::integrate::SimError;
+use crate::law_spec::LawSpec;
 use crate::scene::{ContactLaw, SceneFile};
+use crate::thornton::ThorntonImpact64;
 
 /// Area of the Hertz pulse over `F_max t_c`: `1.6 / 2.9432752` (the impulse `2 m u`).
 pub const C_AREA: f64 = 1.6 / CONTACT_TIME_FACTOR;
@@ -263,7 +271,8 @@ pub fn sharpest_bend(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
 }
 
 /// The ratios of one impact, from its integrated force-time series (trapezoid sums on
-/// `POINTS_PER_PULSE` points per Hertz contact time).
+/// `POINTS_PER_PULSE` points per Hertz contact time), against the Hertz impact, or against
+/// Thornton's undamped impact for [`LawSpec::Thornton`].
 pub fn pulse_ratios(spec: &ImpactSpec) -> Result<PulseRatios, SimError> {
     pulse_ratios_and_series(spec).map(|(r, _)| r)
 }
@@ -271,6 +280,15 @@ pub fn pulse_ratios(spec: &ImpactSpec) -> Result<PulseRatios, SimError> {
 /// [`pulse_ratios`] and the force-time series `(t_s, force_n)` it was computed from.
 fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<(PulseRatios, Vec<(f64, f64)>), SimError> {
     let hertz = spec.hertz()?;
+    let (reference_force_n, reference_duration_s) = match spec.law {
+        LawSpec::Thornton {
+            yield_pressure_pa, ..
+        } => {
+            let t = ThorntonImpact64::new(&hertz, yield_pressure_pa)?;
+            (t.peak_force_n, t.duration_s)
+        }
+        _ => (hertz.peak_force_n, hertz.duration_s),
+    };
     let mut spec = spec.clone();
     spec.record = Some(hertz.duration_s / POINTS_PER_PULSE);
     let report = simulate(&spec)?;
@@ -288,8 +306,8 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<(PulseRatios, Vec<(f64, 
     let t_energy = energy / (C_ENERGY * peak * peak);
     Ok((
         PulseRatios {
-            force: peak / hertz.peak_force_n,
-            duration: t_area / hertz.duration_s,
+            force: peak / reference_force_n,
+            duration: t_area / reference_duration_s,
             shape: t_energy / t_area,
         },
         series,

@@ -75,6 +75,7 @@ pub fn class_to_kernel(c: &ClassSpec) -> ParticleClass {
         speed,
     );
     k.prior = c.prior as f32;
+    k.yield_pressure_pa = c.yield_pressure_pa.map(|p| p as f32);
     k
 }
 

@@ -91,14 +91,21 @@ fn class(out: &mut String, c: &ParticleClass) {
         range(&c.radius_m),
         speed,
     );
-    // `ParticleClass::new` gives a prior of 1; any other is set on top.
-    if c.prior.to_bits() == 1.0f32.to_bits() {
+    // `ParticleClass::new` gives a prior of 1 and no yield; any other is set on top.
+    let mut fields = String::new();
+    if c.prior.to_bits() != 1.0f32.to_bits() {
+        let _ = write!(fields, "            prior: {},\n", lit(c.prior));
+    }
+    if let Some(p) = c.yield_pressure_pa {
+        let _ = write!(fields, "            yield_pressure_pa: Some({}),\n", lit(p));
+    }
+    if fields.is_empty() {
         let _ = writeln!(out, "        {},", args.replace("{indent}", "        "));
     } else {
         let _ = write!(
             out,
-            "        ParticleClass {{\n            prior: {},\n            ..{}\n        }},\n",
-            lit(c.prior),
+            "        ParticleClass {{\n{}            ..{}\n        }},\n",
+            fields,
             args.replace("{indent}", "            "),
         );
     }
