@@ -10,7 +10,9 @@
 //! - Duration from the area: the area of the Hertz pulse is the impulse `2 m u`, and with
 //!   `t_c = 2.9432752 delta_max / u` and `F_max delta_max = (5/4) m u^2` that is
 //!   `C_AREA F_max t_c` with `C_AREA = 1.6 / 2.9432752 = 0.543612`, so
-//!   `t_c = area / (C_AREA F_max)`: unbiased by amplitude, unlike a threshold width.
+//!   `t_c = area / (C_AREA F_max)`: unbiased by amplitude, unlike a threshold width. A
+//!   contact whose pulse has another shape (a yielding one is flatter) states its area
+//!   relative to Hertz's, `Settings::area_ratio`, and `t_c = area / (C_AREA area_ratio F_max)`.
 //! - Shape check: the pulse's energy `sum v^2 dt` is `C_ENERGY F_max^2 t_c` with
 //!   `C_ENERGY = 2 B(8/5, 1/2) / (2.5 * 2.9432752) = 0.411342`, so `t_energy = energy /
 //!   (C_ENERGY F_max^2)` must equal `t_area`; `q = t_energy / t_area` drops for two impacts
@@ -25,8 +27,9 @@
 //!   Hertz pulse is about `-1.65 pi^2 F_max / n^2` at its peak (`n` samples per pulse); one
 //!   below `-(2 * that + spike_fraction F_max + 8 noise)` (`Settings::spike_fraction`, 0.3)
 //!   is a sample that jumped alone: `Spike`. A run of
-//!   `max(3, n / 20)` or more consecutive samples equal to the pulse's largest one, on a
-//!   sensor with at least one count of noise, is a clipped top: `Saturated`.
+//!   `max(3, n / 20)` (times `Settings::flat_top_ratio` for a contact with a broader top) or
+//!   more consecutive samples equal to the pulse's largest one, on a sensor with at least one
+//!   count of noise, is a clipped top: `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the trigger level (times the weight), so
@@ -237,6 +240,10 @@ pub struct Detector<M: Backend = DefaultBackend> {
     skewness: f32,
     smooth: usize,
     shape_ratio: f32,
+    /// [`crate::Settings::area_ratio`].
+    area_ratio: f32,
+    /// [`crate::Settings::flat_top_ratio`].
+    flat_top_ratio: f32,
     spike_fraction: f32,
     hold: u16,
     max_samples: u32,
@@ -297,6 +304,8 @@ impl<M: Backend> Detector<M> {
             skewness: s.contact.skewness,
             smooth: smooth_width(short * fs),
             shape_ratio: s.contact.shape_ratio,
+            area_ratio: s.area_ratio,
+            flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
             hold,
             max_samples,
@@ -901,9 +910,12 @@ impl<M: Backend> Detector<M> {
         let Some((peak, duration)) = fit else {
             return reject(RejectReason::Implausible);
         };
+        // The fit reads the area with the Hertz shape; the contact's own pulse may be flatter.
+        let duration = duration / self.area_ratio;
         // A clipped top: a run of identical samples at the maximum, longer than noise makes by
         // chance and than a long pulse's own flat top (`duration / 20` samples).
-        let flat_limit = (0.05 * duration).max(FLAT_TOP_SAMPLES as f32);
+        // A contact with a broader top than Hertz's (a yielding one) allows that much more.
+        let flat_limit = (0.05 * duration).max(FLAT_TOP_SAMPLES as f32) * self.flat_top_ratio;
         if self.adc_noisy && p.flat as f32 >= flat_limit {
             return reject(RejectReason::Saturated);
         }

@@ -200,6 +200,17 @@ pub struct Settings {
     /// ([`ContactCalibration::skewness`]) beyond the sampling and noise allowance, above which
     /// the pulse is `Misshapen` (two impacts with unequal peaks within one contact).
     pub skew_tolerance: f32,
+    /// Area of the contact's pulse over `F_max t_c`, relative to the Hertz pulse's `C_AREA`
+    /// (1 for the Hertz shape; a yielding pulse is flatter, about 1.12 for the paper's coal at
+    /// 30 MPa): the detector reads `t_c = area / (C_AREA area_ratio F_max)`, so that its
+    /// duration is the pulse's own. Dimensionless, in `1e-3..1e3`.
+    pub area_ratio: f32,
+    /// How much broader, as a share of its duration, the contact's pulse top is than the Hertz
+    /// pulse's (the time within 2 % of the peak; 1 for Hertz, 2-3 for a yielding pulse):
+    /// the run of identical samples at a pulse's maximum that makes it `Saturated` is this
+    /// many times longer, so that a broad top is not taken for a clipped one (a top clipped
+    /// by the same share of its peak is still caught). `>= 1`, at most `1e3`.
+    pub flat_top_ratio: f32,
 }
 
 /// A damped contact against the undamped Hertz model, as the detector measures it: the ratios
@@ -353,6 +364,8 @@ impl Default for Settings {
             contact: ContactCalibration::HERTZ,
             spike_fraction: 0.3,
             skew_tolerance: 0.05,
+            area_ratio: 1.0,
+            flat_top_ratio: 1.0,
         }
     }
 }
@@ -381,6 +394,12 @@ impl Settings {
         }
         if !(self.skew_tolerance.is_finite() && self.skew_tolerance > 0.0) {
             return Err(Error::OutOfRange("skew_tolerance"));
+        }
+        if !(self.area_ratio.is_finite() && (1e-3..=1e3).contains(&self.area_ratio)) {
+            return Err(Error::OutOfRange("area_ratio"));
+        }
+        if !(self.flat_top_ratio.is_finite() && (1.0..=1e3).contains(&self.flat_top_ratio)) {
+            return Err(Error::OutOfRange("flat_top_ratio"));
         }
         if self.release_sigmas > self.trigger_sigmas {
             return Err(Error::InvertedRange("release_sigmas..trigger_sigmas"));

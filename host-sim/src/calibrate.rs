@@ -171,6 +171,51 @@ pub struct Calibration64 {
     /// contact's own pulse bends (0.02-0.2 for Hertz, about 0.56 for Adams with `d = 1e-5 m`
     /// at 100 kS/s).
     pub sharpest_bend: f64,
+    /// Geometric mean over the impacts of the duration from the area with the Hertz shape
+    /// over the pulse's own duration (1 for Hertz; about 1.12 for a yielding pulse, which is
+    /// flatter): the kernel's `Settings::area_ratio` for a scene that yields.
+    pub area_ratio: f64,
+    /// Geometric mean over the impacts of the time the force stays within 2 % of its peak,
+    /// as a fraction of the pulse's duration, over the same of the Hertz pulse
+    /// ([`hertz_top_fraction`]): how much broader the contact's own top is (about 2-3 for a
+    /// yielding pulse). The kernel's `Settings::flat_top_ratio` for a scene that yields.
+    pub flat_top_ratio: f64,
+}
+
+/// The fraction of its contact time a Hertz pulse spends within 2 % of its peak:
+/// `F >= 0.98 F_max` where `delta >= x0 delta_max`, `x0 = 0.98^(2/3)`, so the fraction is
+/// `2 integral_x0^1 dx / sqrt(1 - x^(5/2)) / 2.9432752` (in units `delta_max / u`), taken with
+/// `x = 1 - w^2` (a smooth integrand) by Simpson's rule on 400 intervals: 0.0995.
+pub fn hertz_top_fraction() -> f64 {
+    let x0 = 0.98f64.powf(2.0 / 3.0);
+    let top = (1.0 - x0).sqrt();
+    let f = |w: f64| {
+        if w <= 0.0 {
+            // 2 w / sqrt(1 - (1 - w^2)^(5/2)) -> 2 / sqrt(5/2) as w -> 0.
+            2.0 / 2.5f64.sqrt()
+        } else {
+            2.0 * w / (1.0 - (1.0 - w * w).powf(2.5)).sqrt()
+        }
+    };
+    let n = 400;
+    let h = top / n as f64;
+    let mut sum = f(0.0) + f(top);
+    for k in 1..n {
+        sum += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    2.0 * sum * h / 3.0 / CONTACT_TIME_FACTOR
+}
+
+/// The time the force series `series` (`(t_s, force_n)`, uniformly spaced) stays within 2 %
+/// of its peak, as a fraction of `duration_s`.
+fn top_fraction(series: &[(f64, f64)], duration_s: f64) -> f64 {
+    let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
+    let dt = match (series.first(), series.get(1)) {
+        (Some(a), Some(b)) => b.0 - a.0,
+        _ => return 0.0,
+    };
+    let above = series.iter().filter(|p| p.1 >= 0.98 * peak).count();
+    above as f64 * dt / duration_s
 }
 
 /// Skewness `E[(t - mu)^3] / E[(t - mu)^2]^(3/2)` of the force series `series`
@@ -274,11 +319,28 @@ pub fn sharpest_bend(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
 /// `POINTS_PER_PULSE` points per Hertz contact time), against the Hertz impact, or against
 /// Thornton's undamped impact for [`LawSpec::Thornton`].
 pub fn pulse_ratios(spec: &ImpactSpec) -> Result<PulseRatios, SimError> {
-    pulse_ratios_and_series(spec).map(|(r, _)| r)
+    pulse_ratios_and_series(spec).map(|p| p.ratios)
 }
 
-/// [`pulse_ratios`] and the force-time series `(t_s, force_n)` it was computed from.
-fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<(PulseRatios, Vec<(f64, f64)>), SimError> {
+/// One integrated impact as the calibration sees it.
+struct Pulse64 {
+    /// Its ratios ([`pulse_ratios`]).
+    ratios: PulseRatios,
+    /// Its force-time series `(t_s, force_n)`.
+    series: Vec<(f64, f64)>,
+    /// The duration from the area with the Hertz shape over the pulse's own duration
+    /// (first contact to the force's first zero after its peak): `A / (C_AREA F_peak t_pulse)`.
+    area_ratio: f64,
+    /// The time within 2 % of the peak over the pulse's duration.
+    top_fraction: f64,
+    /// The pulse's peak force in N.
+    peak_n: f64,
+    /// Its duration from the area with the Hertz shape, `A / (C_AREA F_peak)`, in s.
+    area_duration_s: f64,
+}
+
+/// [`pulse_ratios`], the force-time series it was computed from and the pulse's area ratio.
+fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
     let hertz = spec.hertz()?;
     let (reference_force_n, reference_duration_s) = match spec.law {
         LawSpec::Thornton {
@@ -304,14 +366,19 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<(PulseRatios, Vec<(f64, 
     let peak = peak.max(report.peak_force_n);
     let t_area = area / (C_AREA * peak);
     let t_energy = energy / (C_ENERGY * peak * peak);
-    Ok((
-        PulseRatios {
+    let top_fraction = top_fraction(&series, report.pulse_duration_s);
+    Ok(Pulse64 {
+        ratios: PulseRatios {
             force: peak / reference_force_n,
             duration: t_area / reference_duration_s,
             shape: t_energy / t_area,
         },
         series,
-    ))
+        area_ratio: t_area / report.pulse_duration_s,
+        top_fraction,
+        peak_n: peak,
+        area_duration_s: t_area,
+    })
 }
 
 /// The calibration of `scene`'s contact law, or `None` for the undamped Hertz law with no
@@ -329,19 +396,26 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     let mut sampled = 0.0f64;
     let mut pulses = Vec::new();
     let mut shortest_s = f64::INFINITY;
+    let mut ln_area_ratio = 0.0f64;
+    let mut ln_top = 0.0f64;
     for (i, class) in scene.classes.iter().enumerate() {
         let (r, u) = (class.radius_m, class.speed_range_m_s());
         for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
             for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
                 let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
                 spec.law = scene.class_law(i)?;
-                let (ratios, series) = pulse_ratios_and_series(&spec)?;
-                let hertz = spec.hertz()?;
-                shortest_s = shortest_s.min(hertz.duration_s);
-                pulses.push((
-                    ratios.force * hertz.peak_force_n,
-                    ratios.duration * hertz.duration_s,
-                ));
+                let Pulse64 {
+                    ratios,
+                    series,
+                    area_ratio,
+                    top_fraction,
+                    peak_n,
+                    area_duration_s,
+                } = pulse_ratios_and_series(&spec)?;
+                ln_area_ratio += area_ratio.ln();
+                ln_top += (top_fraction / hertz_top_fraction()).ln();
+                shortest_s = shortest_s.min(spec.hertz()?.duration_s);
+                pulses.push((peak_n, area_duration_s));
                 bend = bend.max(sharpest_bend(&series, scene.sensor.sample_rate_hz));
                 skews.push(skewness(&series, 0.005));
                 sampled = sampled.max(sampled_shape_spread(&series, scene.sensor.sample_rate_hz));
@@ -391,5 +465,7 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         sharpest_bend: bend,
         sampled_shape_spread: sampled,
         sampled: sampled_fit,
+        area_ratio: (ln_area_ratio / n).exp(),
+        flat_top_ratio: (ln_top / n).exp(),
     }))
 }

@@ -213,8 +213,9 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
 }
 
 /// The kernel settings of a scene file: [`settings_to_kernel`], and for a damped contact
-/// law the calibration of [`crate::calibrate::calibrate`] (each ratio unless the file gives
-/// it). A law whose ratios vary between impacts widens the tolerances to cover them:
+/// law or a yielding class the calibration of [`crate::calibrate::calibrate`] (each ratio
+/// unless the file gives it; a scene that yields also its `area_ratio`, by which the
+/// duration ratio is then divided). A law whose ratios vary between impacts widens the tolerances to cover them:
 /// `shape_tolerance >= 1.5 x` the spread of `ln q` (between impacts, plus that of sampling at
 /// the scene's rate), `model_sigma >= ` the larger spread of
 /// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend,
@@ -224,9 +225,19 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
     let o = &scene.settings;
     let cal = crate::calibrate::calibrate(scene).map_err(ConvertError::Calibration)?;
     let pick = |given: Option<f64>, computed: Option<f64>| given.or(computed).unwrap_or(1.0) as f32;
+    // A scene that yields reads its flatter pulses' duration with their own area
+    // (`area_ratio`), and the classifier divides only by what remains of the ratio.
+    let area = cal
+        .filter(|_| scene.yields())
+        .map_or(1.0, |c| c.area_ratio);
+    s.area_ratio = area as f32;
+    // ... and allows its broader tops a longer run of equal samples before calling one clipped.
+    if let Some(c) = cal.filter(|_| scene.yields()) {
+        s.flat_top_ratio = c.flat_top_ratio.max(1.0) as f32;
+    }
     s.contact = ContactCalibration {
         force_ratio: pick(o.force_ratio, cal.map(|c| c.ratios.force)),
-        duration_ratio: pick(o.duration_ratio, cal.map(|c| c.ratios.duration)),
+        duration_ratio: pick(o.duration_ratio, cal.map(|c| c.ratios.duration / area)),
         shape_ratio: pick(o.shape_ratio, cal.map(|c| c.ratios.shape)),
         skewness: o.skewness.or(cal.map(|c| c.skewness)).unwrap_or(0.0) as f32,
         sampled: cal

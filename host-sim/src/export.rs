@@ -174,6 +174,8 @@ fn settings(out: &mut String, s: &Settings) {
         contact,
         spike_fraction,
         skew_tolerance,
+        area_ratio,
+        flat_top_ratio,
     } = *s;
     let mut fields = Vec::new();
     let mut float = |name: &str, v: f32, default: f32| {
@@ -194,6 +196,8 @@ fn settings(out: &mut String, s: &Settings) {
     float("shape_tolerance", shape_tolerance, d.shape_tolerance);
     float("spike_fraction", spike_fraction, d.spike_fraction);
     float("skew_tolerance", skew_tolerance, d.skew_tolerance);
+    float("area_ratio", area_ratio, d.area_ratio);
+    float("flat_top_ratio", flat_top_ratio, d.flat_top_ratio);
     let mut int = |name: &str, v: u16, default: u16| {
         if v != default {
             fields.push(format!("        {name}: {v},\n"));
