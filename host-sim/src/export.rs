@@ -454,6 +454,9 @@ mod tests {
                 if c.prior != 1.0 {
                     has(format!("prior: {}", lit(c.prior)));
                 }
+                if let Some(p) = c.yield_pressure_pa {
+                    has(format!("yield_pressure_pa: Some({}),", lit(p)));
+                }
                 has(format!("{:?}", c.name.as_str()));
                 has(material(&c.material));
                 has(range(&c.radius_m));
@@ -495,6 +498,8 @@ mod tests {
                 ("shape_tolerance", st.shape_tolerance, d.shape_tolerance),
                 ("spike_fraction", st.spike_fraction, d.spike_fraction),
                 ("skew_tolerance", st.skew_tolerance, d.skew_tolerance),
+                ("area_ratio", st.area_ratio, d.area_ratio),
+                ("flat_top_ratio", st.flat_top_ratio, d.flat_top_ratio),
             ] {
                 let written = format!("{field}: {},", lit(v));
                 assert_eq!(
