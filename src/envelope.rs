@@ -289,8 +289,9 @@ impl Envelope {
         (sigma_ln_force, sigma_ln_duration): (f32, f32),
         bias_ln_force: f32,
     ) -> Option<(NoiseXy, NoiseXy)> {
+        let map = self.yield_map.as_ref()?;
         let (_, y) = self.invert_ln(ln_force, ln_duration);
-        let l = self.local(y)?;
+        let l = map.local(y);
         let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, l);
         Some((noise, noise.with_bias_through::<M>(bias_ln_force, l)))
     }

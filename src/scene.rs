@@ -492,7 +492,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             let rho = c.material.density_kg_m3;
             let mut env = Envelope::new::<M>(e_eff, rho, c.radius_m, speed, beta)?;
             // Shortest pulse: smallest radius, highest speed; longest: the opposite.
-            let mut short = hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
+            let mut short =
+                hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
             let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
             if let Some(p_y) = c.yield_pressure_pa {
                 env = env.yielding::<M>(e_eff, rho, positive(p_y, "yield_pressure_pa")?)?;

@@ -87,3 +87,42 @@ fn narrow_scene_separates() {
     assert_eq!(s.bayes_error, 0.0);
     assert_eq!(s.overlap_share, 0.0);
 }
+
+/// A class's yield pressure must be finite and positive (a typed error naming it); a yielding
+/// class bends its envelope and lengthens the scene's longest pulse (Thornton's contact
+/// lasts longer), and the same classes without it build the Hertz scene exactly.
+#[test]
+fn yield_pressure_is_checked_and_bends_the_envelope() {
+    use coalshock::{Error, ParticleClass, Range, SensorChain, Settings, Speed};
+    let radius = Range::new(0.015, 0.04);
+    let speed = Speed::Uniform(Range::new(1.0, 5.0));
+    let build = |p_coal: Option<f32>| {
+        let mut coal = ParticleClass::new("coal", Material::COAL, radius, speed);
+        coal.yield_pressure_pa = p_coal;
+        let gangue = ParticleClass::new("gangue", Material::SANDSTONE, radius, speed);
+        Scene::<4>::new(
+            Material::CARBON_STEEL,
+            &[coal, gangue],
+            SensorChain::from_plate(100_000.0, 50.0, 30.0, 4.0, 16),
+            Settings::default(),
+        )
+    };
+    for bad in [0.0, -3e7, f32::NAN, f32::INFINITY] {
+        let err = build(Some(bad)).err();
+        assert!(
+            matches!(
+                err,
+                Some(
+                    Error::NonPositive("yield_pressure_pa") | Error::NonFinite("yield_pressure_pa")
+                )
+            ),
+            "{bad}: {err:?}"
+        );
+    }
+    let elastic = build(None).unwrap();
+    assert_eq!(elastic, Scene::paper().unwrap());
+    let yielding = build(Some(30e6)).unwrap();
+    assert!(yielding.envelopes()[0].yield_map.is_some());
+    assert!(yielding.envelopes()[1].yield_map.is_none());
+    assert!(yielding.duration_bounds_s().1 > 1.3 * elastic.duration_bounds_s().1);
+}

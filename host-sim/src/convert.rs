@@ -227,9 +227,7 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
     let pick = |given: Option<f64>, computed: Option<f64>| given.or(computed).unwrap_or(1.0) as f32;
     // A scene that yields reads its flatter pulses' duration with their own area
     // (`area_ratio`), and the classifier divides only by what remains of the ratio.
-    let area = cal
-        .filter(|_| scene.yields())
-        .map_or(1.0, |c| c.area_ratio);
+    let area = cal.filter(|_| scene.yields()).map_or(1.0, |c| c.area_ratio);
     s.area_ratio = area as f32;
     // ... and allows its broader tops a longer run of equal samples before calling one clipped.
     if let Some(c) = cal.filter(|_| scene.yields()) {

@@ -281,8 +281,13 @@ fn kernel_yield_envelope_follows_the_closed_forms() {
         let p_y = c.yield_pressure_pa.unwrap();
         for radius in [0.015, 0.021, 0.033, 0.04] {
             for speed in [1.0, 1.37, 2.2, 3.05, 4.6, 5.0] {
-                let h = HertzImpact64::new(&c.material.material(), &file.plate.material(), radius, speed)
-                    .unwrap();
+                let h = HertzImpact64::new(
+                    &c.material.material(),
+                    &file.plate.material(),
+                    radius,
+                    speed,
+                )
+                .unwrap();
                 let t = ThorntonImpact64::new(&h, p_y).unwrap();
                 let (x, y) = ((radius as f32).ln(), (speed as f32).ln());
                 let (lf, lt) = env.forward(x, y);
@@ -294,6 +299,9 @@ fn kernel_yield_envelope_follows_the_closed_forms() {
             }
         }
     }
-    println!("kernel yield envelope vs closed forms: features {:.2e}, inverse {:.2e}", worst.0, worst.1);
+    println!(
+        "kernel yield envelope vs closed forms: features {:.2e}, inverse {:.2e}",
+        worst.0, worst.1
+    );
     assert!(worst.0 < 2e-4 && worst.1 < 2e-4, "{worst:?}");
 }

@@ -67,10 +67,7 @@ fn detect(
         samples.iter_mut().for_each(|v| *v = (*v).min(top));
     }
     let mut d = Detector::new(scene);
-    samples
-        .iter()
-        .filter_map(|&s| d.feed(s as i32))
-        .collect()
+    samples.iter().filter_map(|&s| d.feed(s as i32)).collect()
 }
 
 #[test]
@@ -150,7 +147,10 @@ fn clipped_yielding_pulses_are_not_measured() {
             assert!(
                 found.iter().all(|d| matches!(
                     d,
-                    Detection::Pulse { outcome: Err(_), .. }
+                    Detection::Pulse {
+                        outcome: Err(_),
+                        ..
+                    }
                 )),
                 "{class} {radius} {speed} clipped at {depth}: {found:?}"
             );
@@ -162,7 +162,10 @@ fn clipped_yielding_pulses_are_not_measured() {
 fn two_yielding_impacts_in_one_pulse_are_not_measured() {
     let file = yield_scene();
     let scene = scene_to_kernel(&file).unwrap();
-    for (a, b) in [((0, 0.03, 3.0), (0, 0.03, 3.0)), ((1, 0.025, 2.0), (0, 0.02, 4.0))] {
+    for (a, b) in [
+        ((0, 0.03, 3.0), (0, 0.03, 3.0)),
+        ((1, 0.025, 2.0), (0, 0.02, 4.0)),
+    ] {
         let first = thornton_pulse(&file, a.0, a.1, a.2, 0.01);
         for lag in [0.3, 0.5, 0.7] {
             let start = 0.01 + lag * first.duration_s;
@@ -171,7 +174,10 @@ fn two_yielding_impacts_in_one_pulse_are_not_measured() {
             assert!(
                 found.iter().all(|d| matches!(
                     d,
-                    Detection::Pulse { outcome: Err(_), .. }
+                    Detection::Pulse {
+                        outcome: Err(_),
+                        ..
+                    }
                 )),
                 "{a:?} + {b:?} at {lag} t_c: {found:?}"
             );
