@@ -76,7 +76,9 @@ impl YieldMap {
             *h = 1.6 * y + M::ln(r.force) - 2.0 * *phi_t;
         }
         for (a, b) in map.h.iter().zip(map.h.iter().skip(1)) {
-            if !((b - a) >= MIN_SLOPE * step) {
+            // NaN slopes are refused too.
+            let steep = (b - a) >= MIN_SLOPE * step;
+            if !steep {
                 return Err(Error::OutOfRange("yield_pressure_pa (map not invertible)"));
             }
         }

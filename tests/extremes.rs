@@ -1005,8 +1005,9 @@ fn class_field() -> impl Strategy<Value = ParticleClass> {
         any::<bool>(),
         field(1e-3, 1e3),
         0u8..40,
+        prop_oneof![3 => Just(None), 1 => field(1e5, 1e10).prop_map(Some)],
     )
-        .prop_map(|(m, r, s, drop, prior, prior_kind)| {
+        .prop_map(|(m, r, s, drop, prior, prior_kind, yield_pa)| {
             let speed = if drop {
                 Speed::DropHeight(s)
             } else {
@@ -1018,6 +1019,7 @@ fn class_field() -> impl Strategy<Value = ParticleClass> {
                 1 => 1e-45,
                 _ => prior,
             };
+            c.yield_pressure_pa = yield_pa;
             c
         })
 }
@@ -1073,6 +1075,8 @@ fn settings_field() -> impl Strategy<Value = Settings> {
                 contact: coalshock::ContactCalibration::HERTZ,
                 spike_fraction: 0.3,
                 skew_tolerance: 0.05,
+                area_ratio: 1.0,
+                flat_top_ratio: 1.0,
             },
         )
 }

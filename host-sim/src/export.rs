@@ -94,10 +94,10 @@ fn class(out: &mut String, c: &ParticleClass) {
     // `ParticleClass::new` gives a prior of 1 and no yield; any other is set on top.
     let mut fields = String::new();
     if c.prior.to_bits() != 1.0f32.to_bits() {
-        let _ = write!(fields, "            prior: {},\n", lit(c.prior));
+        let _ = writeln!(fields, "            prior: {},", lit(c.prior));
     }
     if let Some(p) = c.yield_pressure_pa {
-        let _ = write!(fields, "            yield_pressure_pa: Some({}),\n", lit(p));
+        let _ = writeln!(fields, "            yield_pressure_pa: Some({}),", lit(p));
     }
     if fields.is_empty() {
         let _ = writeln!(out, "        {},", args.replace("{indent}", "        "));
