@@ -234,7 +234,12 @@ impl Envelope {
         if !env.ln_normalizer.is_finite() {
             return Err(Error::Unrepresentable("prior density"));
         }
-        env.check_corners::<M>()?;
+        // Every corner must give a peak force and duration that f32 carries.
+        for (x, y) in env.corners() {
+            let (lf, lt) = env.forward(x, y);
+            representable(M::exp(lf), "peak force")?;
+            representable(M::exp(lt), "contact duration")?;
+        }
         Ok(env)
     }
 
@@ -242,6 +247,7 @@ impl Envelope {
     /// `yield_pressure_pa` (Pa), for the same material (`effective_modulus_pa`,
     /// `density_kg_m3`) as [`Envelope::new`]: its [`YieldMap`] over the class's speed range
     /// from the yield speed `V_y = 1.5605 (p_y^5 / (E*^4 rho))^(1/2)`.
+    #[inline(never)]
     pub fn yielding<M: Backend>(
         mut self,
         effective_modulus_pa: f32,
@@ -250,30 +256,43 @@ impl Envelope {
     ) -> Result<Self, Error> {
         let v_y = yield_speed_in::<M>(effective_modulus_pa, density_kg_m3, yield_pressure_pa)?;
         self.yield_map = Some(YieldMap::new::<M>(v_y, self.ln_speed)?);
-        self.check_corners::<M>()?;
+        // Every corner must give a peak force and duration that f32 carries, checked in log
+        // space (`ln 1e-30 ..= ln 1e30`), so that no backend's `exp` is needed here.
+        let (lo, hi) = (-69.077_55_f32, 69.077_55_f32);
+        for (x, y) in self.corners() {
+            let (lf, lt) = self.forward(x, y);
+            if !(lo..=hi).contains(&lf) {
+                return Err(Error::Unrepresentable("peak force"));
+            }
+            if !(lo..=hi).contains(&lt) {
+                return Err(Error::Unrepresentable("contact duration"));
+            }
+        }
         Ok(self)
     }
 
-    /// Every corner must give a peak force and duration that f32 carries.
-    fn check_corners<M: Backend>(&self) -> Result<(), Error> {
-        for (x, y) in self.corners() {
-            let (lf, lt) = self.forward(x, y);
-            representable(M::exp(lf), "peak force")?;
-            representable(M::exp(lt), "contact duration")?;
+    /// The yield map, if the class yields and the kernel is built with the `plasticity`
+    /// feature (without it the bent paths compile away: a firmware whose scenes do not yield
+    /// carries none of them).
+    #[inline(always)]
+    fn bent(&self) -> Option<&YieldMap> {
+        if cfg!(feature = "plasticity") {
+            self.yield_map.as_ref()
+        } else {
+            None
         }
-        Ok(())
     }
 
     /// The yield map's values and slopes at `y = ln u`, or `None` for a Hertz envelope.
     pub fn local(&self, y: f32) -> Option<Local> {
-        self.yield_map.map(|m| m.local(y))
+        self.bent().map(|m| m.local(y))
     }
 
     /// `ln(8/5 / h'(y))`: what a yielding class's density at `y = ln u` adds to
     /// [`Envelope::ln_normalizer`] (0 for a Hertz envelope).
     pub fn ln_density_excess<M: Backend>(&self, y: f32) -> f32 {
-        match self.local(y) {
-            Some(l) => M::ln(JACOBIAN / l.jacobian),
+        match self.bent() {
+            Some(map) => ln_excess::<M>(map, y),
             None => 0.0,
         }
     }
@@ -283,13 +302,14 @@ impl Envelope {
     /// widened by a chain's bias `bias_ln_force` ([`NoiseXy::through`],
     /// [`NoiseXy::with_bias_through`]); `None` for a Hertz envelope (the caller's
     /// [`NoiseXy::new`] holds).
+    #[inline(never)]
     pub fn yield_noise<M: Backend>(
         &self,
         (ln_force, ln_duration): (f32, f32),
         (sigma_ln_force, sigma_ln_duration): (f32, f32),
         bias_ln_force: f32,
     ) -> Option<(NoiseXy, NoiseXy)> {
-        let map = self.yield_map.as_ref()?;
+        let map = self.bent()?;
         let (_, y) = self.invert_ln(ln_force, ln_duration);
         let l = map.local(y);
         let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, l);
@@ -299,10 +319,8 @@ impl Envelope {
     /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s; for a yielding class
     /// `ln t_c = ln c_t + x - y/5 + phi_t(y)`, `ln F_max = ln c_F - 2 ln c_t + 2 ln t_c + h(y)`.
     pub fn forward(&self, x: f32, y: f32) -> (f32, f32) {
-        if let Some(l) = self.local(y) {
-            let lt = self.ln_duration_coeff + x - 0.2 * y + l.phi_t;
-            let lf = self.ln_force_coeff - 2.0 * self.ln_duration_coeff + 2.0 * lt + l.h;
-            return (lf, lt);
+        if let Some(map) = self.bent() {
+            return self.forward_bent(map, x, y);
         }
         (
             self.ln_force_coeff + 2.0 * x + 1.2 * y,
@@ -314,14 +332,32 @@ impl Envelope {
     /// For a yielding class `y` solves `h(y) = a - 2 b` on the map and
     /// `x = b + y/5 - phi_t(y)`.
     pub fn invert_ln(&self, ln_force: f32, ln_duration: f32) -> (f32, f32) {
+        if let Some(map) = self.bent() {
+            return self.invert_bent(map, ln_force, ln_duration);
+        }
         let a = ln_force - self.ln_force_coeff;
         let b = ln_duration - self.ln_duration_coeff;
-        if let Some(m) = &self.yield_map {
-            let y = m.ln_speed_for(a - 2.0 * b);
-            return (b + 0.2 * y - m.local(y).phi_t, y);
-        }
         let y = (a - 2.0 * b) / JACOBIAN;
         (b + 0.2 * y, y)
+    }
+
+    /// [`Envelope::forward`] of a yielding class (out of line: a scene without yield carries
+    /// one copy, not one per caller).
+    #[inline(never)]
+    fn forward_bent(&self, map: &YieldMap, x: f32, y: f32) -> (f32, f32) {
+        let l = map.local(y);
+        let lt = self.ln_duration_coeff + x - 0.2 * y + l.phi_t;
+        let lf = self.ln_force_coeff - 2.0 * self.ln_duration_coeff + 2.0 * lt + l.h;
+        (lf, lt)
+    }
+
+    /// [`Envelope::invert_ln`] of a yielding class (out of line, as [`Envelope::forward_bent`]).
+    #[inline(never)]
+    fn invert_bent(&self, map: &YieldMap, ln_force: f32, ln_duration: f32) -> (f32, f32) {
+        let a = ln_force - self.ln_force_coeff;
+        let b = ln_duration - self.ln_duration_coeff;
+        let y = map.ln_speed_for(a - 2.0 * b);
+        (b + 0.2 * y - map.local(y).phi_t, y)
     }
 
     /// The radius and speed this class needs for a pulse of `peak_force_n` and `duration_s`,
@@ -398,7 +434,7 @@ impl Envelope {
             return f32::NEG_INFINITY;
         }
         let ll = M::ln(ix * iy) + self.ln_normalizer + b * y + 0.5 * b * shift;
-        if self.yield_map.is_some() {
+        if self.bent().is_some() {
             ll + self.ln_density_excess::<M>(y)
         } else {
             ll
@@ -414,6 +450,12 @@ impl Envelope {
         let dy = outside(y, self.ln_speed) / noise.sigma_y;
         dx * dx + dy * dy
     }
+}
+
+/// `ln(8/5 / h'(y))` of a yield map (out of line, as [`Envelope::forward_bent`]).
+#[inline(never)]
+fn ln_excess<M: Backend>(map: &YieldMap, y: f32) -> f32 {
+    M::ln(JACOBIAN / map.local(y).jacobian)
 }
 
 /// `MIN_SIGMA` for NaN or tiny values, at most [`MAX_SIGMA`].

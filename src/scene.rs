@@ -496,7 +496,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
                 hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
             let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
             if let Some(p_y) = c.yield_pressure_pa {
-                env = env.yielding::<M>(e_eff, rho, positive(p_y, "yield_pressure_pa")?)?;
+                env = bend::<M>(env, e_eff, rho, positive(p_y, "yield_pressure_pa")?)?;
                 let (x0, x1) = env.ln_radius;
                 let (y0, y1) = env.ln_speed;
                 short = M::exp(env.forward(x0, y1).1);
@@ -744,6 +744,27 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         }
         next
     }
+}
+
+/// The envelope of a class that yields at `yield_pressure_pa` ([`Envelope::yielding`]).
+#[cfg(feature = "plasticity")]
+fn bend<M: Backend>(
+    env: Envelope,
+    effective_modulus_pa: f32,
+    density_kg_m3: f32,
+    yield_pressure_pa: f32,
+) -> Result<Envelope, Error> {
+    env.yielding::<M>(effective_modulus_pa, density_kg_m3, yield_pressure_pa)
+}
+
+/// Without the `plasticity` feature a class that yields is refused (`M` kept so that both
+/// versions are called alike).
+#[cfg(not(feature = "plasticity"))]
+#[allow(clippy::extra_unused_type_parameters)]
+fn bend<M: Backend>(_: Envelope, _: f32, _: f32, _: f32) -> Result<Envelope, Error> {
+    Err(Error::OutOfRange(
+        "yield_pressure_pa (kernel built without the `plasticity` feature)",
+    ))
 }
 
 /// Up to `N` intervals of `[0, 1]` (one per other class of a scene of `N` classes).
