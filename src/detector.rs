@@ -240,9 +240,11 @@ pub struct Detector<M: Backend = DefaultBackend> {
     skewness: f32,
     smooth: usize,
     shape_ratio: f32,
-    /// [`crate::Settings::area_ratio`].
+    /// `Settings::area_ratio` (feature `plasticity`).
+    #[cfg(feature = "plasticity")]
     area_ratio: f32,
-    /// [`crate::Settings::flat_top_ratio`].
+    /// `Settings::flat_top_ratio` (feature `plasticity`).
+    #[cfg(feature = "plasticity")]
     flat_top_ratio: f32,
     spike_fraction: f32,
     hold: u16,
@@ -304,7 +306,9 @@ impl<M: Backend> Detector<M> {
             skewness: s.contact.skewness,
             smooth: smooth_width(short * fs),
             shape_ratio: s.contact.shape_ratio,
+            #[cfg(feature = "plasticity")]
             area_ratio: s.area_ratio,
+            #[cfg(feature = "plasticity")]
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
             hold,
@@ -911,11 +915,14 @@ impl<M: Backend> Detector<M> {
             return reject(RejectReason::Implausible);
         };
         // The fit reads the area with the Hertz shape; the contact's own pulse may be flatter.
+        #[cfg(feature = "plasticity")]
         let duration = duration / self.area_ratio;
         // A clipped top: a run of identical samples at the maximum, longer than noise makes by
         // chance and than a long pulse's own flat top (`duration / 20` samples).
         // A contact with a broader top than Hertz's (a yielding one) allows that much more.
-        let flat_limit = (0.05 * duration).max(FLAT_TOP_SAMPLES as f32) * self.flat_top_ratio;
+        let flat_limit = (0.05 * duration).max(FLAT_TOP_SAMPLES as f32);
+        #[cfg(feature = "plasticity")]
+        let flat_limit = flat_limit * self.flat_top_ratio;
         if self.adc_noisy && p.flat as f32 >= flat_limit {
             return reject(RejectReason::Saturated);
         }

@@ -18,6 +18,7 @@
 use crate::error::{Error, positive, representable};
 use crate::hertz::CONTACT_TIME_FACTOR;
 use crate::math::{self, Backend};
+#[cfg(feature = "plasticity")]
 use crate::thornton::yield_speed_in;
 use crate::yield_map::{Local, YieldMap};
 
@@ -92,7 +93,9 @@ pub struct Envelope {
     /// density adds `ln(8/5 / h'(y))` at the point ([`Envelope::ln_density_excess`]).
     pub ln_normalizer: f32,
     /// The yield map that bends the envelope, for a class whose contact yields; `None`: the
-    /// Hertz parallelogram.
+    /// Hertz parallelogram. Only with the `plasticity` feature (without it every envelope is
+    /// Hertz's and carries no table).
+    #[cfg(feature = "plasticity")]
     pub yield_map: Option<YieldMap>,
 }
 
@@ -229,6 +232,7 @@ impl Envelope {
             ln_speed: (y0, y1),
             speed_beta,
             ln_normalizer: -M::ln(x1 - x0) - M::ln(JACOBIAN) + ln_py,
+            #[cfg(feature = "plasticity")]
             yield_map: None,
         };
         if !env.ln_normalizer.is_finite() {
@@ -247,6 +251,7 @@ impl Envelope {
     /// `yield_pressure_pa` (Pa), for the same material (`effective_modulus_pa`,
     /// `density_kg_m3`) as [`Envelope::new`]: its [`YieldMap`] over the class's speed range
     /// from the yield speed `V_y = 1.5605 (p_y^5 / (E*^4 rho))^(1/2)`.
+    #[cfg(feature = "plasticity")]
     #[inline(never)]
     pub fn yielding<M: Backend>(
         mut self,
@@ -276,11 +281,10 @@ impl Envelope {
     /// carries none of them).
     #[inline(always)]
     fn bent(&self) -> Option<&YieldMap> {
-        if cfg!(feature = "plasticity") {
-            self.yield_map.as_ref()
-        } else {
-            None
-        }
+        #[cfg(feature = "plasticity")]
+        return self.yield_map.as_ref();
+        #[cfg(not(feature = "plasticity"))]
+        None
     }
 
     /// The yield map's values and slopes at `y = ln u`, or `None` for a Hertz envelope.

@@ -203,13 +203,17 @@ pub struct Settings {
     /// Area of the contact's pulse over `F_max t_c`, relative to the Hertz pulse's `C_AREA`
     /// (1 for the Hertz shape; a yielding pulse is flatter, about 1.12 for the paper's coal at
     /// 30 MPa): the detector reads `t_c = area / (C_AREA area_ratio F_max)`, so that its
-    /// duration is the pulse's own. Dimensionless, in `1e-3..1e3`.
+    /// duration is the pulse's own. Dimensionless, in `1e-3..1e3`. With the `plasticity`
+    /// feature only.
+    #[cfg(feature = "plasticity")]
     pub area_ratio: f32,
     /// How much broader, as a share of its duration, the contact's pulse top is than the Hertz
     /// pulse's (the time within 2 % of the peak; 1 for Hertz, 2-3 for a yielding pulse):
     /// the run of identical samples at a pulse's maximum that makes it `Saturated` is this
     /// many times longer, so that a broad top is not taken for a clipped one (a top clipped
-    /// by the same share of its peak is still caught). `>= 1`, at most `1e3`.
+    /// by the same share of its peak is still caught). `>= 1`, at most `1e3`. With the
+    /// `plasticity` feature only.
+    #[cfg(feature = "plasticity")]
     pub flat_top_ratio: f32,
 }
 
@@ -364,7 +368,9 @@ impl Default for Settings {
             contact: ContactCalibration::HERTZ,
             spike_fraction: 0.3,
             skew_tolerance: 0.05,
+            #[cfg(feature = "plasticity")]
             area_ratio: 1.0,
+            #[cfg(feature = "plasticity")]
             flat_top_ratio: 1.0,
         }
     }
@@ -395,11 +401,14 @@ impl Settings {
         if !(self.skew_tolerance.is_finite() && self.skew_tolerance > 0.0) {
             return Err(Error::OutOfRange("skew_tolerance"));
         }
-        if !(self.area_ratio.is_finite() && (1e-3..=1e3).contains(&self.area_ratio)) {
-            return Err(Error::OutOfRange("area_ratio"));
-        }
-        if !(self.flat_top_ratio.is_finite() && (1.0..=1e3).contains(&self.flat_top_ratio)) {
-            return Err(Error::OutOfRange("flat_top_ratio"));
+        #[cfg(feature = "plasticity")]
+        {
+            if !(1e-3..=1e3).contains(&self.area_ratio) {
+                return Err(Error::OutOfRange("area_ratio"));
+            }
+            if !(1.0..=1e3).contains(&self.flat_top_ratio) {
+                return Err(Error::OutOfRange("flat_top_ratio"));
+            }
         }
         if self.release_sigmas > self.trigger_sigmas {
             return Err(Error::InvertedRange("release_sigmas..trigger_sigmas"));
@@ -496,7 +505,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
                 hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
             let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
             if let Some(p_y) = c.yield_pressure_pa {
-                env = bend::<M>(env, e_eff, rho, positive(p_y, "yield_pressure_pa")?)?;
+                env = bend::<M>(env, e_eff, rho, p_y)?;
                 let (x0, x1) = env.ln_radius;
                 let (y0, y1) = env.ln_speed;
                 short = M::exp(env.forward(x0, y1).1);
@@ -754,7 +763,8 @@ fn bend<M: Backend>(
     density_kg_m3: f32,
     yield_pressure_pa: f32,
 ) -> Result<Envelope, Error> {
-    env.yielding::<M>(effective_modulus_pa, density_kg_m3, yield_pressure_pa)
+    let p_y = positive(yield_pressure_pa, "yield_pressure_pa")?;
+    env.yielding::<M>(effective_modulus_pa, density_kg_m3, p_y)
 }
 
 /// Without the `plasticity` feature a class that yields is refused (`M` kept so that both
