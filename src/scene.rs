@@ -755,26 +755,19 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     }
 }
 
-/// The envelope of a class that yields at `yield_pressure_pa` ([`Envelope::yielding`]).
-#[cfg(feature = "plasticity")]
-fn bend<M: Backend>(
-    env: Envelope,
-    effective_modulus_pa: f32,
-    density_kg_m3: f32,
-    yield_pressure_pa: f32,
-) -> Result<Envelope, Error> {
-    let p_y = positive(yield_pressure_pa, "yield_pressure_pa")?;
-    env.yielding::<M>(effective_modulus_pa, density_kg_m3, p_y)
-}
-
-/// Without the `plasticity` feature a class that yields is refused (`M` kept so that both
-/// versions are called alike).
-#[cfg(not(feature = "plasticity"))]
-#[allow(clippy::extra_unused_type_parameters)]
-fn bend<M: Backend>(_: Envelope, _: f32, _: f32, _: f32) -> Result<Envelope, Error> {
-    Err(Error::OutOfRange(
-        "yield_pressure_pa (kernel built without the `plasticity` feature)",
-    ))
+/// The envelope `env` of a class that yields at `p_y` Pa ([`Envelope::yielding`]; its
+/// material: effective modulus `e` Pa, density `rho` kg/m^3); without the `plasticity`
+/// feature such a class is refused.
+fn bend<M: Backend>(env: Envelope, e: f32, rho: f32, p_y: f32) -> Result<Envelope, Error> {
+    #[cfg(feature = "plasticity")]
+    return env.yielding::<M>(e, rho, positive(p_y, "yield_pressure_pa")?);
+    #[cfg(not(feature = "plasticity"))]
+    {
+        let _ = (env, e, rho, p_y, M::default());
+        Err(Error::OutOfRange(
+            "yield_pressure_pa (kernel built without the `plasticity` feature)",
+        ))
+    }
 }
 
 /// Up to `N` intervals of `[0, 1]` (one per other class of a scene of `N` classes).
