@@ -744,7 +744,7 @@ impl Equaliser {
     }
 
     /// Runs `sink` over the equalised `(raw, value)` pairs of `raw`, with the filter
-    /// specialised for 3 or 4 sections (fewer are padded with [`Section::IDENTITY`]), its
+    /// specialised for 3 or 4 sections (fewer are padded with pass-through sections), its
     /// coefficients and states in locals (registers) and written back once: the equaliser
     /// advances by exactly the samples `sink` takes, so a sink that stops early (the
     /// detector's quiet loop) leaves it where [`Equaliser::step`] on those samples would.

@@ -43,7 +43,7 @@ pub const C_ENERGY: f64 = 2.0 * 0.893_515_349_287_690_3 * 1.772_453_850_905_516
 const SMOOTH_FROM_SAMPLES: f64 = 24.0;
 
 /// Sample phases per point of [`sampled_calibration`].
-const SAMPLED_PHASES: usize = 16;
+pub const SAMPLED_PHASES: usize = 16;
 
 /// The sampling correction of a damped contact, per point `n_k = 2.5 * 1.6^k` samples per
 /// pulse (`coalshock::SampledCalibration`): mean and spread of `ln(measured / continuous)` of
