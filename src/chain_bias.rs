@@ -25,7 +25,7 @@
 //! into its integral instead of sampling its peak.
 
 use crate::equaliser::{Accelerometer, BeamMode, ChainDynamics, ChainTolerance};
-use crate::math::Backend;
+use crate::math::{self, Backend};
 
 /// Durations the bound is tabulated at.
 pub const POINTS: usize = 6;
@@ -222,16 +222,7 @@ impl ChainBias {
     /// between the points and held beyond them; 0 for [`ChainBias::NONE`].
     pub fn bias_ln_force(&self, ln_duration: f32) -> f32 {
         let at = (ln_duration - self.ln_duration0) * self.points_per_ln;
-        let at = if at.is_finite() {
-            at.clamp(0.0, (POINTS - 1) as f32)
-        } else {
-            0.0
-        };
-        let i = (at as usize).min(POINTS - 2);
-        let frac = at - i as f32;
-        let at_point = |k: usize| self.bias_ln_force.get(k).copied().unwrap_or(0.0);
-        let (a, b) = (at_point(i), at_point(i + 1));
-        a + (b - a) * frac
+        math::interpolate(&self.bias_ln_force, math::table_position(at, POINTS))
     }
 
     /// The bound at each tabulated point, from the shortest pulse to the longest.

@@ -119,6 +119,32 @@ pub type DefaultBackend = Libm;
 /// Name of the default backend, for reports.
 pub const BACKEND: &str = DefaultBackend::NAME;
 
+/// Where the fractional index `at` falls in a table of `points >= 2` entries: `(i, f)` with
+/// `i <= points - 2` and the weight `f` of entry `i + 1`, `at` clamped to `[0, points - 1]`
+/// (a non-finite `at` reads entry 0). With [`interpolate`], a table linear between its points
+/// and held beyond them.
+#[inline]
+pub fn table_position(at: f32, points: usize) -> (usize, f32) {
+    let last = points.saturating_sub(1) as f32;
+    let at = if at.is_finite() {
+        at.clamp(0.0, last)
+    } else {
+        0.0
+    };
+    let i = (at as usize).min(points.saturating_sub(2));
+    (i, at - i as f32)
+}
+
+/// `t[i] + (t[i + 1] - t[i]) f` at a [`table_position`] `(i, f)`; a missing entry reads 0.
+#[inline]
+pub fn interpolate(t: &[f32], (i, f): (usize, f32)) -> f32 {
+    let (a, b) = (
+        t.get(i).copied().unwrap_or(0.0),
+        t.get(i + 1).copied().unwrap_or(0.0),
+    );
+    a + (b - a) * f
+}
+
 /// `P(a < Z < b) = Phi(b) - Phi(a)` of a standard normal `Z`, with relative precision in
 /// both tails: when `a` and `b` lie on the same side of 0 the difference is taken between the
 /// tails `Q(|x|) = erfc(|x| / sqrt 2) / 2` (libm), which keep their digits down to about

@@ -9,7 +9,7 @@ use crate::equaliser::{ChainDynamics, EqualiserDesign};
 use crate::error::{Error, positive, representable};
 use crate::hertz;
 use crate::material::{Material, effective_modulus_pa};
-use crate::math::{Backend, DefaultBackend};
+use crate::math::{self, Backend, DefaultBackend};
 
 /// Shortest duration, in samples, that is classified: a pulse measured shorter (by more than
 /// three of its sigmas) is rejected as `TooShort`, and a scene whose shortest pulse is shorter
@@ -287,21 +287,8 @@ impl SampledCalibration {
     pub fn at(&self, ln_samples: f32) -> (f32, f32, f32, f32) {
         const LN_FIRST: f32 = 0.916_290_7; // ln 2.5
         const LN_STEP: f32 = 0.470_003_6; // ln 1.6
-        let at = (ln_samples - LN_FIRST) / LN_STEP;
-        let at = if at.is_finite() {
-            at.clamp(0.0, (SAMPLED_POINTS - 1) as f32)
-        } else {
-            0.0
-        };
-        let i = (at as usize).min(SAMPLED_POINTS - 2);
-        let f = at - i as f32;
-        let lerp = |t: &[f32; SAMPLED_POINTS]| {
-            let (a, b) = (
-                t.get(i).copied().unwrap_or(0.0),
-                t.get(i + 1).copied().unwrap_or(0.0),
-            );
-            a + (b - a) * f
-        };
+        let at = math::table_position((ln_samples - LN_FIRST) / LN_STEP, SAMPLED_POINTS);
+        let lerp = |t: &[f32; SAMPLED_POINTS]| math::interpolate(t, at);
         (
             lerp(&self.ln_force),
             lerp(&self.ln_duration),
