@@ -24,6 +24,7 @@
 //! (`s = (0.5 STEP_V + j v) / t_c`), which smooths a mode's resonance narrower than the step
 //! into its integral instead of sampling its peak.
 
+use crate::complex::C;
 use crate::equaliser::{Accelerometer, BeamMode, ChainDynamics, ChainTolerance};
 use crate::math::{self, Backend};
 
@@ -231,46 +232,39 @@ impl ChainBias {
     }
 }
 
-/// A complex number, what `E(s)` needs.
-#[derive(Debug, Clone, Copy)]
-struct C(f32, f32);
-
-impl C {
-    fn mul(self, o: C) -> C {
-        C(self.0 * o.0 - self.1 * o.1, self.0 * o.1 + self.1 * o.0)
-    }
-    fn div(self, o: C) -> C {
-        let d = o.0 * o.0 + o.1 * o.1;
-        C(
-            (self.0 * o.0 + self.1 * o.1) / d,
-            (self.1 * o.0 - self.0 * o.1) / d,
-        )
-    }
-    fn sub(self, o: C) -> C {
-        C(self.0 - o.0, self.1 - o.1)
-    }
-}
-
 /// `s^2 + 2 zeta w s + w^2` at `s`, with `w = 2 pi f`.
 fn resonance(s: C, frequency_hz: f32, damping_ratio: f32) -> C {
     let w = 2.0 * core::f32::consts::PI * frequency_hz;
     let s2 = s.mul(s);
-    C(
-        s2.0 + 2.0 * damping_ratio * w * s.0 + w * w,
-        s2.1 + 2.0 * damping_ratio * w * s.1,
+    C::new(
+        s2.re + 2.0 * damping_ratio * w * s.re + w * w,
+        s2.im + 2.0 * damping_ratio * w * s.im,
     )
 }
 
 /// A beam mode's term `g s^2 / (s^2 + 2 zeta w s + w^2)`.
-fn mode_term(s: C, m: &BeamMode) -> C {
+pub(crate) fn mode_term(s: C, m: &BeamMode) -> C {
     let s2 = s.mul(s);
-    C(m.gain * s2.0, m.gain * s2.1).div(resonance(s, m.frequency_hz, m.damping_ratio))
+    C::new(m.gain * s2.re, m.gain * s2.im).div(resonance(s, m.frequency_hz, m.damping_ratio))
 }
 
 /// The accelerometer's `w^2 / (s^2 + 2 zeta w s + w^2)`.
-fn accelerometer_term(s: C, a: &Accelerometer) -> C {
+pub(crate) fn accelerometer_term(s: C, a: &Accelerometer) -> C {
     let w = 2.0 * core::f32::consts::PI * a.frequency_hz;
-    C(w * w, 0.0).div(resonance(s, a.frequency_hz, a.damping_ratio))
+    C::new(w * w, 0.0).div(resonance(s, a.frequency_hz, a.damping_ratio))
+}
+
+/// The whole chain `H(s) = (1 + sum_j g_j s^2 / d_j(s)) H_a(s)` at `s` (rad/s), unit gain at
+/// DC ([`crate::equaliser`] writes it out).
+pub(crate) fn chain_term(s: C, d: &ChainDynamics) -> C {
+    let beam = d
+        .modes()
+        .iter()
+        .fold(C::new(1.0, 0.0), |sum, m| sum.add(mode_term(s, m)));
+    match d.accelerometer() {
+        Some(a) => beam.mul(accelerometer_term(s, &a)),
+        None => beam,
+    }
 }
 
 /// The three relative moves of a stage's parameters, each alone, with both signs.
@@ -306,11 +300,11 @@ fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
             1.0
         };
         let w = weight * trapezoid * STEP_V / core::f32::consts::PI;
-        let s = C(0.5 * STEP_V / t_c, v / t_c);
-        let mut beam = C(1.0, 0.0);
+        let s = C::new(0.5 * STEP_V / t_c, v / t_c);
+        let mut beam = C::new(1.0, 0.0);
         for m in d.modes() {
             let t = mode_term(s, m);
-            beam = C(beam.0 + t.0, beam.1 + t.1);
+            beam = C::new(beam.re + t.re, beam.im + t.im);
         }
         for (m, row) in d.modes().iter().zip(sums.iter_mut()) {
             let t = mode_term(s, m);
@@ -321,7 +315,7 @@ fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
                     damping_ratio: m.damping_ratio * (1.0 + dz),
                     gain: m.gain * (1.0 + dg),
                 };
-                *sum += mode_term(s, &moved).sub(t).div(beam).0 * w;
+                *sum += mode_term(s, &moved).sub(t).div(beam).re * w;
             }
         }
         if let (Some(a), Some(row)) = (d.accelerometer(), sums.last_mut()) {
@@ -332,7 +326,7 @@ fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
                     frequency_hz: a.frequency_hz * (1.0 + df),
                     damping_ratio: a.damping_ratio * (1.0 + dz),
                 };
-                *sum += accelerometer_term(s, &moved).div(t).0 * w - w;
+                *sum += accelerometer_term(s, &moved).div(t).re * w - w;
             }
         }
     }
