@@ -11,7 +11,9 @@
 )]
 
 pub mod chain_bias;
+pub mod chain_residual;
 pub mod classifier;
+mod complex;
 pub mod counters;
 pub mod detector;
 pub mod envelope;

@@ -4,6 +4,7 @@
 use heapless::{String, Vec};
 
 use crate::chain_bias::ChainBias;
+use crate::chain_residual::{self, SMOOTH_FROM_SAMPLES};
 use crate::envelope::{Envelope, Range};
 use crate::equaliser::{ChainDynamics, EqualiserDesign};
 use crate::error::{Error, positive, representable};
@@ -297,6 +298,30 @@ impl SampledCalibration {
         )
     }
 
+    /// Both corrections at once: the means added, the spreads in quadrature (each kept within
+    /// the ranges a scene accepts, `|ln| <= 2` and `sigma <= 2`).
+    pub fn combined<M: Backend>(&self, other: &SampledCalibration) -> SampledCalibration {
+        let add = |a: &[f32; SAMPLED_POINTS], b: &[f32; SAMPLED_POINTS]| {
+            core::array::from_fn(|k| {
+                let (x, y) = (a.get(k).copied(), b.get(k).copied());
+                (x.unwrap_or(0.0) + y.unwrap_or(0.0)).max(-2.0).min(2.0)
+            })
+        };
+        let quad = |a: &[f32; SAMPLED_POINTS], b: &[f32; SAMPLED_POINTS]| {
+            core::array::from_fn(|k| {
+                let (x, y) = (a.get(k).copied(), b.get(k).copied());
+                let (x, y) = (x.unwrap_or(0.0), y.unwrap_or(0.0));
+                M::sqrt(x * x + y * y).min(2.0)
+            })
+        };
+        SampledCalibration {
+            ln_force: add(&self.ln_force, &other.ln_force),
+            ln_duration: add(&self.ln_duration, &other.ln_duration),
+            sigma_ln_force: quad(&self.sigma_ln_force, &other.sigma_ln_force),
+            sigma_ln_duration: quad(&self.sigma_ln_duration, &other.sigma_ln_duration),
+        }
+    }
+
     fn check(&self) -> Result<(), Error> {
         let all = |t: &[f32; SAMPLED_POINTS], lo: f32| {
             t.iter().all(|v| v.is_finite() && (lo..=2.0).contains(v))
@@ -443,7 +468,9 @@ pub struct Scene<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> 
 }
 
 impl<const N: usize, M: Backend> Scene<N, M> {
-    /// Builds a scene and precomputes every class's envelope and the separability.
+    /// Builds a scene and precomputes every class's envelope and the separability, and behind a
+    /// chain that is not rigid the bias its equaliser leaves in short pulses
+    /// ([`crate::chain_residual`], folded into `settings.contact.sampled`).
     ///
     /// Refuses, with a typed [`Error`]: invalid materials, ranges or sensor settings; fewer than
     /// two classes or more than `N`; any corner of any envelope whose peak force or duration
@@ -520,6 +547,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         representable(longest * sensor.sample_rate_hz, "longest pulse in samples")?;
         let chain_bias =
             ChainBias::new::<M>(&sensor.dynamics, sensor.sample_rate_hz, shortest, longest);
+        let mut settings = settings;
+        if !equaliser.is_identity() && shortest * sensor.sample_rate_hz < SMOOTH_FROM_SAMPLES {
+            let r =
+                chain_residual::residual::<M>(&sensor.dynamics, &equaliser, sensor.sample_rate_hz);
+            settings.contact.sampled = settings.contact.sampled.combined::<M>(&r);
+        }
         let mut scene = Self {
             plate,
             classes: stored,
@@ -577,7 +610,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         &self.chain_bias
     }
 
-    /// The settings.
+    /// The settings as given, but for `contact.sampled` behind a chain that is not rigid: the
+    /// bias the equaliser leaves in short pulses ([`crate::chain_residual`]) is added to it
+    /// ([`SampledCalibration::combined`]).
     pub fn settings(&self) -> &Settings {
         &self.settings
     }

@@ -7,10 +7,9 @@
 mod common;
 
 use coalshock::math::Libm;
-use coalshock::{ChainBias, ChainTolerance, Equaliser, EqualiserDesign};
+use coalshock::{ChainBias, ChainTolerance};
 use host_sim::convert::sensor_to_kernel;
 use host_sim::scene::SensorSpec;
-use host_sim::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
 
 const FS: f64 = 100_000.0;
 const PEAK_COUNTS: f64 = 20_000.0;
@@ -22,23 +21,10 @@ fn equalised_peak_and_area(
     believed: &SensorSpec,
     duration_s: f64,
 ) -> (f64, f64) {
-    let sensor = Sensor::new(truth).unwrap();
     let start_s = 0.002;
-    let pulse = ForcePulse {
-        start_s,
-        duration_s,
-        scale: 1.0,
-        shape: PulseShape::HertzSine {
-            peak_force_n: PEAK_COUNTS / sensor.counts_per_newton(),
-        },
-    };
     let n = (0.006 * FS) as usize;
-    let analog = sensor.analog_counts(&ForceTrack::new(vec![pulse]), n, 0.0);
-    let raw: Vec<i32> = analog.iter().map(|v| v.round() as i32).collect();
-    let chain = sensor_to_kernel(believed).unwrap();
-    let design = EqualiserDesign::new::<Libm>(&chain.dynamics, FS as f32).unwrap();
-    let mut out = vec![0.0f32; n];
-    Equaliser::new(&design).process(&raw, &mut out);
+    let (out, _) =
+        common::equalised_hertz_pulse(truth, believed, (start_s, duration_s, PEAK_COUNTS), n);
     let out: Vec<f64> = out.iter().map(|&v| v as f64).collect();
     let (i, _) = out
         .iter()

@@ -23,6 +23,36 @@ pub fn chain_spec(fs: f64, modes: &[(f64, f64, f64)], acc: Option<(f64, f64)>) -
     s
 }
 
+/// One Hertz pulse (`sin^(3/2)`) of `peak_counts` from `start_s` for `duration_s` through
+/// `chain`, equalised by the kernel's equaliser for `believed`: `samples` equalised counts.
+pub fn equalised_hertz_pulse(
+    chain: &SensorSpec,
+    believed: &SensorSpec,
+    (start_s, duration_s, peak_counts): (f64, f64, f64),
+    samples: usize,
+) -> (Vec<f32>, coalshock::EqualiserDesign) {
+    use host_sim::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
+    let sensor = Sensor::new(chain).unwrap();
+    let pulse = ForcePulse {
+        start_s,
+        duration_s,
+        scale: 1.0,
+        shape: PulseShape::HertzSine {
+            peak_force_n: peak_counts / sensor.counts_per_newton(),
+        },
+    };
+    let analog = sensor.analog_counts(&ForceTrack::new(vec![pulse]), samples, 0.0);
+    let raw: Vec<i32> = analog.iter().map(|v| v.round() as i32).collect();
+    let dynamics = host_sim::convert::sensor_to_kernel(believed)
+        .unwrap()
+        .dynamics;
+    let fs = chain.sample_rate_hz as f32;
+    let design = coalshock::EqualiserDesign::new::<coalshock::math::Libm>(&dynamics, fs).unwrap();
+    let mut out = vec![0.0f32; samples];
+    coalshock::Equaliser::new(&design).process(&raw, &mut out);
+    (out, design)
+}
+
 /// The scene file `name` shipped in the workspace's `scenes/` folder.
 pub fn shipped_scene(name: &str) -> host_sim::scene::SceneFile {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
