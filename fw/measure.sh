@@ -13,13 +13,16 @@
 # (`front_end_ok`), and its sizes are reported.
 # Also builds the reference node (fw/src/bin/reference_node.rs, feature `board`, profile
 # `board`) and budgets its flash and static RAM.
+# Also builds the node and the reference node with the yield feature (`plasticity`) and runs the
+# node with the yielding scene: the feature's flash, RAM, stack and instructions are budgeted
+# (`plasticity_*`, `yield_*`), and the non-yielding scenes must give the default node's lines.
 # Also reported, not budgeted: the kernel built for thumbv6m-none-eabi (Cortex-M0/M0+) and
 # thumbv8m.main-none-eabihf (Cortex-M33), and the same firmware's figures on a Cortex-M0 core
 # (QEMU `-cpu cortex-m0` on the same machine: ARMv6-M instructions, no FPU).
 #
 # Outputs go to $FW_OUT (default: <cargo target dir>/fw): node.txt (decoded node output),
-# measures.txt (every figure as `key value`), nopanic.txt, budget.md, front_end.txt, and the
-# same for M0.
+# measures.txt (every figure as `key value`), nopanic.txt, budget.md, front_end.txt, the
+# same for M0, and node-plasticity (ELF), node-plasticity.txt, nopanic-plasticity.txt.
 # Environment: FW_SKIP_M0=1 skips the Cortex-M0 build and run.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -148,6 +151,74 @@ section "reference node: STM32F405 + IIS3DWB (build only; no IIS3DWB in QEMU)"
 fwcargo build --profile board --features board --bin reference_node
 sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_" 0 \
     | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
+
+section "plasticity: the yield feature (fw feature plasticity; kernel feature plasticity)"
+# Three more builds (the default ones above stay as they were and carry none of it):
+#   - the node with the fw feature `plasticity`: the kernel's `plasticity` on, and the yielding
+#     scene scenes/paper_yield.toml with its stream fw/data/yield_stream.* measured and logged
+#     (prefix `yield `). Run in QEMU; its figures go to measures.txt with the prefix
+#     `plasticity_`, except the yielding scene's own (`yield_*`); its paper and chain lines
+#     must equal the default node's (`plasticity_verdicts_same`); its ELF is kept as
+#     $out/node-plasticity and its log as $out/node-plasticity.txt;
+#   - the node with only the kernel's `plasticity` (no yielding scene in the image):
+#     `plasticity_flash_added_bytes`, the flash the kernel feature adds to the measuring node;
+#   - the reference node with the kernel's `plasticity` (`board` profile):
+#     `reference_node_plasticity_flash_added_bytes`, the same for a size-optimised node with
+#     one backend.
+streams_yield=$(( streams_node + $(stat -c %s fw/data/yield_stream.bin) ))
+fwcargo build --release --target thumbv7em-none-eabihf --bin node --features plasticity
+elf_p=$out/node-plasticity
+cp "$elf" "$elf_p"
+if fw/run.sh "$elf_p" > "$out/node-plasticity.txt"; then
+    echo "node (plasticity) exited with success ($(grep -c '^yield pulse ' "$out/node-plasticity.txt") yield pulse lines)"
+else
+    rc=$?
+    echo "node (plasticity) FAILED (status $rc); its output:"
+    cat "$out/node-plasticity.txt"
+    status=1
+fi
+sed -n -e 's/^measure \(yield_[a-z0-9_]*\) \([0-9]*\)$/\1 \2/p' \
+    -e 's/^measure \([a-z0-9_]*\) \([0-9]*\)$/plasticity_\1 \2/p' "$out/node-plasticity.txt" \
+    >> "$out/measures.txt"
+sizes "$elf_p" "plasticity_" "$streams_yield" | tee -a "$out/measures.txt"
+set +e
+python3 fw/nopanic.py --objdump "$tools/llvm-objdump" --package-src "$root/src" "$elf_p" \
+    > "$out/nopanic-plasticity.txt"
+set -e
+tail -1 "$out/nopanic-plasticity.txt"
+sed -n 's/^nopanic: \([0-9]*\) kernel panic site(s), .*$/plasticity_nopanic_kernel_sites \1/p' \
+    "$out/nopanic-plasticity.txt" >> "$out/measures.txt"
+verdicts='^(chain )?(pulse|stuck|classified|rejected|counters) '
+if diff <(grep -E "$verdicts" "$out/node.txt") <(grep -E "$verdicts" "$out/node-plasticity.txt") \
+        > /dev/null; then
+    echo "plasticity_verdicts_same 1" | tee -a "$out/measures.txt"
+else
+    echo "plasticity_verdicts_same 0  (paper or chain lines differ from the default node's)" \
+        | tee -a "$out/measures.txt"
+fi
+# The flash the kernel's feature adds: `plasticity_kernel_flash_code_bytes` minus the default
+# node's `flash_code_bytes` (same streams, same measuring code).
+fwcargo build --release --target thumbv7em-none-eabihf --bin node --features coalshock/plasticity
+sizes "$elf" "plasticity_kernel_" "$streams_node" | grep '_flash_code_bytes ' \
+    | tee -a "$out/measures.txt"
+fwcargo build --profile board --features board,coalshock/plasticity --bin reference_node
+sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_plasticity_" 0 \
+    | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
+python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
+import sys
+m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
+for key, a, b in [
+    ("plasticity_flash_added_bytes", "plasticity_kernel_flash_code_bytes", "flash_code_bytes"),
+    ("reference_node_plasticity_flash_added_bytes", "reference_node_plasticity_flash_bytes",
+     "reference_node_flash_bytes"),
+    ("plasticity_kernel_ram_added_bytes", "plasticity_kernel_ram_bytes", "kernel_ram_bytes"),
+]:
+    if a in m and b in m:
+        print(f"{key} {int(m[a]) - int(m[b])}")
+PY
+# Leave the default images in place (cached: no rebuild).
+fwcargo build --release --target thumbv7em-none-eabihf --bin node
+fwcargo build --profile board --features board --bin reference_node
 
 section "other cores: the kernel alone"
 for t in thumbv6m-none-eabi thumbv8m.main-none-eabihf; do

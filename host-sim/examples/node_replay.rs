@@ -6,7 +6,9 @@
 //! scene's stream (`fw/data/chain_stream.*`, from `scenes/piezo_chain.toml`), every line
 //! after the prefix `chain `. The kernel scene the node builds for each stream
 //! (`fw/replay/src/scenes/`, written by `host-sim export`) must equal what host-sim makes of
-//! its scene file (`scenes/paper.toml`, `scenes/piezo_chain.toml`).
+//! its scene file (`scenes/paper.toml`, `scenes/piezo_chain.toml`). Then the yielding
+//! scene's stream (`fw/data/yield_stream.*`, from `scenes/paper_yield.toml`), every line after
+//! the prefix `yield `, which the node built with the feature `plasticity` prints.
 //!
 //! Run: `cargo run -p host-sim --example node_replay`.
 
@@ -42,6 +44,20 @@ fn main() {
         &root.join("fw/data/chain_stream"),
         &coalshock_replay::CHAIN,
         chain,
+    );
+
+    let yielding = coalshock_replay::build_yield_scene::<DefaultBackend>()
+        .unwrap_or_else(|e| fail(format!("yield scene {e:?}")));
+    same_as_file(
+        &yielding,
+        &root.join("scenes/paper_yield.toml"),
+        "yield scene",
+    );
+    replay(
+        "yield ",
+        &root.join("fw/data/yield_stream"),
+        &coalshock_replay::YIELD,
+        yielding,
     );
 }
 

@@ -124,10 +124,36 @@ fn contact_is_default(c: &ContactCalibration) -> bool {
         && c.sampled == SampledCalibration::NONE
 }
 
-/// `[a, b, ..]` of f32 literals that read back bit for bit.
-fn lit_array(v: &[f32]) -> String {
+/// The field `name: [a, b, ..],` of f32 literals that read back bit for bit, at `indent`
+/// spaces, laid out as rustfmt lays it out: on one line when the array is at most 60 columns
+/// wide and the line at most 100; else, when every literal is short (at most 10 characters),
+/// literals filled into lines of at most 100 columns; else one literal per line.
+fn lit_array_field(name: &str, v: &[f32], indent: usize) -> String {
     let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
-    format!("[{}]", items.join(", "))
+    let pad = " ".repeat(indent);
+    let one_line = format!("[{}]", items.join(", "));
+    let field = format!("{pad}{name}: {one_line},");
+    if one_line.len() <= 60 && field.len() <= 100 {
+        return field + "\n";
+    }
+    let inner = " ".repeat(indent + 4);
+    let mut lines = Vec::new();
+    if items.iter().all(|i| i.len() <= 10) {
+        let mut line = inner.clone();
+        for item in &items {
+            if line.len() > inner.len() && line.len() + 1 + item.len() + 1 > 100 {
+                lines.push(std::mem::replace(&mut line, inner.clone()));
+            }
+            if line.len() > inner.len() {
+                line.push(' ');
+            }
+            let _ = write!(line, "{item},");
+        }
+        lines.push(line);
+    } else {
+        lines.extend(items.iter().map(|item| format!("{inner}{item},")));
+    }
+    format!("{pad}{name}: [\n{}\n{pad}],\n", lines.join("\n"))
 }
 
 /// The sampling correction as a `SampledCalibration` literal, or its `NONE`.
@@ -142,16 +168,11 @@ fn sampled_literal(s: &SampledCalibration) -> String {
         sigma_ln_duration,
     } = s;
     format!(
-        "SampledCalibration {{\n                \
-             ln_force: {},\n                \
-             ln_duration: {},\n                \
-             sigma_ln_force: {},\n                \
-             sigma_ln_duration: {},\n            \
-         }}",
-        lit_array(ln_force),
-        lit_array(ln_duration),
-        lit_array(sigma_ln_force),
-        lit_array(sigma_ln_duration),
+        "SampledCalibration {{\n{}{}{}{}            }}",
+        lit_array_field("ln_force", ln_force, 16),
+        lit_array_field("ln_duration", ln_duration, 16),
+        lit_array_field("sigma_ln_force", sigma_ln_force, 16),
+        lit_array_field("sigma_ln_duration", sigma_ln_duration, 16),
     )
 }
 
@@ -269,7 +290,8 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
     );
     let mut uses = vec!["Error", "Material", "ParticleClass"];
     if !contact_is_default(&settings_k.contact) {
-        uses.push("ContactCalibration");
+        // The calibration literal names its sampling correction (or its `NONE`).
+        uses.extend(["ContactCalibration", "SampledCalibration"]);
     }
     uses.extend(["Range", "Scene", "SensorChain", "Settings", "Speed"]);
     if !rigid {
@@ -527,6 +549,8 @@ mod tests {
             if contact_is_default(&c) {
                 assert!(!text.contains("ContactCalibration"), "{name}");
             } else {
+                // Whatever the literal names is imported.
+                assert!(text.contains(" SampledCalibration,"), "{name}");
                 for (field, v) in [
                     ("force_ratio", c.force_ratio),
                     ("duration_ratio", c.duration_ratio),
@@ -538,6 +562,63 @@ mod tests {
             }
             assert!(text.contains("Settings::default()"), "{name}");
         }
+    }
+
+    /// Arrays laid out as rustfmt 1.95 (edition 2024, default settings) lays out the same
+    /// fields inside a `SampledCalibration` literal (the expected texts are its output): one
+    /// line up to 60 columns of array, short literals filled up to 100 columns, long ones one
+    /// per line.
+    #[test]
+    fn arrays_are_laid_out_as_rustfmt_does() {
+        let short = [0.05, 0.01, 0.003, 0.001, 0.001, 0.0007, 0.0002, 0.00011];
+        assert_eq!(
+            lit_array_field("ln_z", &short, 16),
+            "                ln_z: [0.05, 0.01, 0.003, 0.001, 0.001, 0.0007, 0.0002, 0.00011],\n"
+        );
+        let wide = [
+            0.05, 0.01, 0.003, 0.001, 0.001, 0.0007, 0.0002, 0.0001, 0.01,
+        ];
+        assert_eq!(
+            lit_array_field("ln_y", &wide, 16),
+            "                ln_y: [\n                    \
+             0.05, 0.01, 0.003, 0.001, 0.001, 0.0007, 0.0002, 0.0001, 0.01,\n                ],\n"
+        );
+        let filled = [
+            0.0054962, -0.011278, 0.0038743, 0.0014294, 0.0018145, 0.000712, 0.0002847, 0.0001095,
+        ];
+        assert_eq!(
+            lit_array_field("ln_duration", &filled, 16),
+            "                ln_duration: [\n                    \
+             0.0054962, -0.011278, 0.0038743, 0.0014294, 0.0018145, 0.000712, 0.0002847,\n                    \
+             0.0001095,\n                ],\n"
+        );
+        let long = [
+            0.005496286,
+            0.01127803,
+            0.00387434,
+            0.00142947,
+            0.00181459,
+            0.00071209,
+            0.0002847,
+            0.0001095,
+        ];
+        let rows: String = [
+            "0.005496286",
+            "0.01127803",
+            "0.00387434",
+            "0.00142947",
+            "0.00181459",
+            "0.00071209",
+            "0.0002847",
+            "0.0001095",
+        ]
+        .iter()
+        .map(|r| format!("                    {r},\n"))
+        .collect();
+        assert_eq!(
+            lit_array_field("ln_force", &long, 16),
+            format!("                ln_force: [\n{rows}                ],\n")
+        );
     }
 
     #[test]

@@ -12,7 +12,7 @@ fn root() -> std::path::PathBuf {
 
 #[test]
 fn node_scenes_are_the_exported_scene_files() {
-    for name in ["paper", "piezo_chain"] {
+    for name in ["paper", "piezo_chain", "paper_yield"] {
         let file = host_sim::scene::load(root().join(format!("scenes/{name}.toml"))).unwrap();
         let text = scene_source(&file, &format!("scenes/{name}.toml")).unwrap();
         let shipped =
@@ -38,5 +38,9 @@ fn compiled_node_scenes_equal_host_sim_scenes() {
     assert_eq!(
         coalshock_replay::scenes::piezo_chain::scene::<DefaultBackend>().unwrap(),
         load("piezo_chain")
+    );
+    assert_eq!(
+        coalshock_replay::scenes::paper_yield::scene::<DefaultBackend>().unwrap(),
+        load("paper_yield")
     );
 }

@@ -14,6 +14,11 @@
 //! [`CHAIN`] and its scene [`build_chain_scene`]. [`PAPER`] is the first stream in the same
 //! form.
 //!
+//! With the feature `plasticity` (the kernel's `plasticity` on) a third stream,
+//! `fw/data/yield_stream.bin` and `.truth.csv`, comes from the yielding scene
+//! `scenes/paper_yield.toml` (the paper's classes with Thornton's elastic-plastic contact); it
+//! is `YIELD` and its scene `build_yield_scene`. Without the feature neither is compiled.
+//!
 //! The scenes ([`scenes`]) are written by `host-sim export` from the scene files, so the node
 //! builds exactly the kernel scene host-sim builds from each file.
 #![no_std]
@@ -24,6 +29,8 @@ pub mod front_end;
 /// regenerates them; `fw/stream.sh --check` fails unless they are reproduced byte for byte).
 pub mod scenes {
     pub mod paper;
+    #[cfg(feature = "plasticity")]
+    pub mod paper_yield;
     pub mod piezo_chain;
 }
 
@@ -65,6 +72,19 @@ const CHAIN_STORED: usize = include_bytes!("../../data/chain_stream.bin").len() 
 const CHAIN_GAP_COUNT: usize = count_rows(CHAIN_TRUTH, b"gap,");
 const CHAIN_GAPS: [Gap; CHAIN_GAP_COUNT] = gap_rows(CHAIN_TRUTH, CHAIN_STORED);
 
+/// The yielding scene's stream (`fw/stream.sh`): little-endian i16 samples, dropped samples
+/// left out (feature `plasticity`).
+#[cfg(feature = "plasticity")]
+static YIELD_BYTES: &[u8] = include_bytes!("../../data/yield_stream.bin");
+#[cfg(feature = "plasticity")]
+const YIELD_TRUTH: &[u8] = include_bytes!("../../data/yield_stream.truth.csv");
+#[cfg(feature = "plasticity")]
+const YIELD_STORED: usize = include_bytes!("../../data/yield_stream.bin").len() / 2;
+#[cfg(feature = "plasticity")]
+const YIELD_GAP_COUNT: usize = count_rows(YIELD_TRUTH, b"gap,");
+#[cfg(feature = "plasticity")]
+const YIELD_GAPS: [Gap; YIELD_GAP_COUNT] = gap_rows(YIELD_TRUTH, YIELD_STORED);
+
 /// A replayed stream: its stored samples and the gaps of its truth file.
 #[derive(Debug, Clone, Copy)]
 pub struct Stream {
@@ -85,6 +105,14 @@ pub static PAPER: Stream = Stream {
 pub static CHAIN: Stream = Stream {
     bytes: CHAIN_BYTES,
     gaps: &CHAIN_GAPS,
+};
+
+/// The yielding scene's stream (`fw/data/yield_stream.*`, from `scenes/paper_yield.toml`;
+/// feature `plasticity`).
+#[cfg(feature = "plasticity")]
+pub static YIELD: Stream = Stream {
+    bytes: YIELD_BYTES,
+    gaps: &YIELD_GAPS,
 };
 
 impl Stream {
@@ -240,6 +268,15 @@ pub fn build_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock:
 /// accelerometer.
 pub fn build_chain_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
     scenes::piezo_chain::scene()
+}
+
+/// The yielding scene of `scenes/paper_yield.toml` ([`scenes::paper_yield`]) with math
+/// backend `M`: the paper scene with a limiting contact pressure for each class (coal 30 MPa,
+/// sandstone 130 MPa), whose envelopes follow Thornton's elastic-plastic contact (feature
+/// `plasticity`).
+#[cfg(feature = "plasticity")]
+pub fn build_yield_scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
+    scenes::paper_yield::scene()
 }
 
 /// One `pulse` line, in integers so host and node print the same text.

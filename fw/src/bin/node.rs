@@ -297,17 +297,75 @@ struct Figures {
     verdicts: u32,
 }
 
-/// Builds the paper scene with backend `M` and feeds the whole stream through a monitor,
+/// A scene the node measures and the stream it replays through it.
+trait Measured {
+    /// The scene with backend `M`.
+    fn build<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error>;
+    /// The stream: every stored sample, each recorded gap at its place.
+    fn inputs() -> impl Iterator<Item = Input>;
+}
+
+/// The paper scene (`scenes/paper.toml`) and its stream (`fw/data/paper_stream.*`).
+struct Paper;
+
+impl Measured for Paper {
+    fn build<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
+        build_scene::<M>()
+    }
+    fn inputs() -> impl Iterator<Item = Input> {
+        inputs()
+    }
+}
+
+/// The yielding scene (`scenes/paper_yield.toml`: the paper's classes with Thornton's
+/// elastic-plastic contact) and its stream (`fw/data/yield_stream.*`); feature `plasticity`.
+#[cfg(feature = "plasticity")]
+struct Yielding;
+
+#[cfg(feature = "plasticity")]
+impl Measured for Yielding {
+    fn build<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, coalshock::Error> {
+        coalshock_replay::build_yield_scene::<M>()
+    }
+    fn inputs() -> impl Iterator<Item = Input> {
+        coalshock_replay::YIELD.inputs()
+    }
+}
+
+/// The yielding scene with the default backend (feature `plasticity`): a measuring pass over
+/// its stream (its figures reported with the prefix `yield_`), then a logging pass (every
+/// line after the prefix `yield `), one `feed` per sample as for the paper stream. Also
+/// reports `yield_table_class_bytes`, the RAM a class's yield table adds to its envelope
+/// (`size_of::<Option<YieldMap>>()`), and whether every pulse was counted once. Returns
+/// whether both passes gave the same counters, and the lowest stack address touched.
+#[cfg(feature = "plasticity")]
+#[inline(never)]
+fn yield_pass(clock: &Clock) -> (bool, usize) {
+    let Some((f, scene)) = measured_pass::<Yielding, DefaultBackend>() else {
+        refused()
+    };
+    let (counters, _) = replay_logged("yield ", Monitor::new(scene), Yielding::inputs());
+    report("yield_", &f, clock);
+    let measure = |key: &str, value: u64| defmt::println!("measure {=str} {=u64}", key, value);
+    measure(
+        "yield_table_class_bytes",
+        core::mem::size_of::<Option<coalshock::yield_map::YieldMap>>() as u64,
+    );
+    measure("yield_counters_balanced", counters.balanced() as u64);
+    (counters == f.counters, f.lowest.min(rt::lowest_touched()))
+}
+
+/// Builds the scene `S` with backend `M` and feeds the whole of its stream through a monitor,
 /// timing every call and measuring the stack below this function of each phase. No
 /// logging. Returns the figures and the scene (for the logging pass).
 #[inline(never)]
-fn measured_pass<M: Backend>() -> Option<(Figures, Scene<DEFAULT_CLASSES, M>)> {
+fn measured_pass<S: Measured, M: Backend>() -> Option<(Figures, Scene<DEFAULT_CLASSES, M>)> {
     let mut lowest = rt::lowest_touched();
 
     // Scene build.
     let base = rt::paint();
     let t0 = stamp();
-    let built = build_scene::<M>();
+    let built = S::build::<M>();
     let scene_ticks = stamp() - t0;
     let stack_scene = rt::used_since(base);
     lowest = lowest.min(rt::lowest_touched());
@@ -330,7 +388,7 @@ fn measured_pass<M: Backend>() -> Option<(Figures, Scene<DEFAULT_CLASSES, M>)> {
     let mut current = 0u32;
     let mut verdicts = 0x811C_9DC5u32;
     let base = rt::paint();
-    for input in inputs() {
+    for input in S::inputs() {
         let s = match input {
             Input::Sample(s) => s,
             Input::Gap(lost) => {
@@ -509,10 +567,10 @@ fn main() -> ! {
 
     // Measuring passes, one per math backend; the default backend's figures are the
     // unprefixed ones the budgets apply to.
-    let Some((libm, libm_scene)) = measured_pass::<Libm>() else {
+    let Some((libm, libm_scene)) = measured_pass::<Paper, Libm>() else {
         refused()
     };
-    let Some((micro, micro_scene)) = measured_pass::<Micromath>() else {
+    let Some((micro, micro_scene)) = measured_pass::<Paper, Micromath>() else {
         refused()
     };
     let default_is_libm = DefaultBackend::NAME == Libm::NAME;
@@ -533,6 +591,11 @@ fn main() -> ! {
     let Ok(chain_scene) = built else { refused() };
     let (chain_quiet, chain_quiet_events) = quiet_blocks(chain_scene.clone());
     let chain = chain_pass(&CHAIN, chain_scene);
+    // The yielding scene (feature `plasticity`): measured, then logged with the prefix `yield `.
+    #[cfg(feature = "plasticity")]
+    let (yield_same, yield_lowest) = yield_pass(&clock);
+    #[cfg(not(feature = "plasticity"))]
+    let (yield_same, yield_lowest) = (true, usize::MAX);
 
     let measure = |key: &str, value: u64| defmt::println!("measure {=str} {=u64}", key, value);
     defmt::println!("backend {=str}", DefaultBackend::NAME);
@@ -573,7 +636,11 @@ fn main() -> ! {
     measure("insns_flow_update_max", flow.max(&clock));
     report("libm_", &libm, &clock);
     report("micromath_", &micro, &clock);
-    let lowest = libm.lowest.min(micro.lowest).min(rt::lowest_touched());
+    let lowest = libm
+        .lowest
+        .min(micro.lowest)
+        .min(yield_lowest)
+        .min(rt::lowest_touched());
     measure("stack_total_bytes", (rt::stack_region().1 - lowest) as u64);
     measure("cal_ticks", clock.cal_ticks);
     measure("cal_insns", clock.cal_insns);
@@ -585,7 +652,7 @@ fn main() -> ! {
         "backends_same_verdicts",
         (libm.verdicts == micro.verdicts) as u64,
     );
-    exit(same)
+    exit(same && yield_same)
 }
 
 /// Feeds the stream with logging; `true` when the counters equal the measuring pass's.
