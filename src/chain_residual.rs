@@ -25,12 +25,17 @@
 //! it. Points at [`SMOOTH_FROM_SAMPLES`] samples per pulse or more are left at 0: the fit's
 //! error there is below 1e-3 and a scene whose every pulse is that long is read by the
 //! smoothed top, not by this fit.
+//!
+//! It runs once per scene, in f32 with libm whatever the scene's backend, and only behind a
+//! chain: `SensorChain::with_dynamics` hands [`residual`] to the chain as a
+//! [`crate::equaliser::ResidualFn`], so a firmware whose chain is rigid links none of it.
+//! Its helpers are not inlined: this runs once per scene and is kept small in flash.
 
 use crate::chain_bias::{HERTZ_SPECTRUM, MAX_V, STEP_V, chain_term};
 use crate::complex::{C, cis};
 use crate::detector::shape_fit;
 use crate::equaliser::{ChainDynamics, EqualiserDesign};
-use crate::math::{self, Backend};
+use crate::math::{self, Backend, Libm as M};
 use crate::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
 
 /// Sample phases averaged per point.
@@ -45,7 +50,7 @@ const AROUND: usize = 5;
 /// The equaliser's residual bias at each point `n_k` of a [`SampledCalibration`], for
 /// `dynamics` equalised by `design` at `sample_rate_hz`; [`SampledCalibration::NONE`] for
 /// a rigid chain.
-pub fn residual<M: Backend>(
+pub fn residual(
     dynamics: &ChainDynamics,
     design: &EqualiserDesign,
     sample_rate_hz: f32,
@@ -57,7 +62,7 @@ pub fn residual<M: Backend>(
     let mut n = SAMPLED_FIRST_N;
     for k in 0..SAMPLED_POINTS {
         if n < SMOOTH_FROM_SAMPLES {
-            let [lf, lt, sf, st] = point::<M>(dynamics, design, sample_rate_hz, n);
+            let [lf, lt, sf, st] = point(dynamics, design, sample_rate_hz, n);
             for (table, v) in [
                 (&mut out.ln_force, lf),
                 (&mut out.ln_duration, lt),
@@ -76,9 +81,8 @@ pub fn residual<M: Backend>(
 
 /// `[mean ln F, mean ln t, spread ln F, spread ln t]` of the fit of the equalised pulse over
 /// the rigid one's, at `n` samples per pulse.
-// Not inlined: a rigid scene's build never calls it and must not carry its frame.
 #[inline(never)]
-fn point<M: Backend>(
+fn point(
     dynamics: &ChainDynamics,
     design: &EqualiserDesign,
     sample_rate_hz: f32,
@@ -92,8 +96,8 @@ fn point<M: Backend>(
     for p in 0..PHASES {
         let phase = (p as f32 + 0.5) / PHASES as f32 - 0.5;
         let (Some(rigid), Some(chain)) = (
-            fit::<M>(n, phase, &aliases, None),
-            fit::<M>(n, phase, &aliases, Some(&weights)),
+            fit(n, phase, &aliases, None),
+            fit(n, phase, &aliases, Some(&weights)),
         ) else {
             continue;
         };
@@ -122,6 +126,7 @@ fn point<M: Backend>(
 
 /// Trapezoid weights `(R(v_i) - 1) S1(v_i) h_i / pi` at `v_i = i STEP_V`, for pulses of
 /// `t_c` (s) at `n` samples per pulse.
+#[inline(never)]
 fn weights(d: &ChainDynamics, q: &EqualiserDesign, n: f32, t_c: f32) -> [C; HERTZ_SPECTRUM.len()] {
     let mut w = [C::default(); HERTZ_SPECTRUM.len()];
     let last = HERTZ_SPECTRUM.len() - 1;
@@ -137,6 +142,7 @@ fn weights(d: &ChainDynamics, q: &EqualiserDesign, n: f32, t_c: f32) -> [C; HERT
 }
 
 /// Aliases `m = 1, 2` of the sum: `H(j 2 pi m f_s) - 1` and `S1(2 pi m n)`.
+#[inline(never)]
 fn aliases(d: &ChainDynamics, sample_rate_hz: f32, n: f32) -> [(C, f32); 2] {
     let tau = core::f32::consts::TAU;
     [1.0f32, 2.0].map(|m| {
@@ -155,7 +161,8 @@ fn spectrum(v: f32) -> f32 {
 }
 
 /// The kernel's pulse shape `P(x) = cos^(3/2)(pi x)` on `|x| < 1/2`, else 0.
-fn shape<M: Backend>(x: f32) -> f32 {
+#[inline(never)]
+fn shape(x: f32) -> f32 {
     if x.abs() >= 0.5 {
         return 0.0;
     }
@@ -166,16 +173,12 @@ fn shape<M: Backend>(x: f32) -> f32 {
 
 /// The detector's fit `[F, t]` of the pulse sampled at `x_j = (j + phase) / n`: rigid
 /// (`weights` `None`), or equalised.
-fn fit<M: Backend>(
-    n: f32,
-    phase: f32,
-    aliases: &[(C, f32); 2],
-    weights: Option<&[C]>,
-) -> Option<[f32; 2]> {
+#[inline(never)]
+fn fit(n: f32, phase: f32, aliases: &[(C, f32); 2], weights: Option<&[C]>) -> Option<[f32; 2]> {
     let mut y = [0.0f32; AROUND];
     for (j, slot) in y.iter_mut().enumerate() {
         let x = (j as f32 - 2.0 + phase) / n;
-        *slot = shape::<M>(x) + weights.map_or(0.0, |w| residual_at(w, x));
+        *slot = shape(x) + weights.map_or(0.0, |w| residual_at(w, x));
     }
     let mut sum = n * HERTZ_SPECTRUM.first().copied().unwrap_or(0.0);
     for (m, &(h1, s1)) in aliases.iter().enumerate() {
@@ -193,6 +196,7 @@ fn fit<M: Backend>(
 }
 
 /// `(1 / pi) int_0^MAX_V Re((R - 1) e^(j v x)) S1(v) dv` from the trapezoid weights.
+#[inline(never)]
 fn residual_at(weights: &[C], x: f32) -> f32 {
     let step = cis(STEP_V * x);
     let mut rot = C::new(1.0, 0.0);

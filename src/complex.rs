@@ -40,7 +40,8 @@ impl C {
 }
 
 /// `e^(i theta)` (`theta` in rad, any finite value): reduced to `[-pi, pi]`, then
-/// [`crate::math::sin_cos`].
+/// [`crate::math::sin_cos`]. Not inlined: only a scene's build calls it.
+#[inline(never)]
 pub(crate) fn cis(theta: f32) -> C {
     use core::f32::consts::TAU;
     let r = theta - TAU * libm::floorf(theta / TAU + 0.5);

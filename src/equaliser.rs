@@ -57,6 +57,7 @@ use crate::complex::{C, cis};
 use crate::error::Error;
 pub use crate::error::{ChainFault, ChainStage};
 use crate::math::Backend;
+use crate::sampled::SampledCalibration;
 
 /// Most beam modes a chain can carry.
 pub const MAX_MODES: usize = 4;
@@ -151,6 +152,34 @@ pub struct ChainDynamics {
     tolerance: ChainTolerance,
     /// The equaliser and the sample rate (Hz) it was designed at.
     design: Option<(f32, EqualiserDesign)>,
+    /// What computes the bias the equaliser leaves in short pulses (set with the design by
+    /// `SensorChain::with_dynamics`, so that a rigid chain's firmware links none of it).
+    residual: Option<ResidualFn>,
+}
+
+/// A function computing the bias an equaliser leaves in pulses of few samples, per point
+/// of a [`SampledCalibration`]: `(dynamics, design, sample_rate_hz) -> correction`. The
+/// kernel has one, `chain_residual::residual`; every `ResidualFn` is taken as equal.
+#[derive(Clone, Copy)]
+pub struct ResidualFn(pub fn(&ChainDynamics, &EqualiserDesign, f32) -> SampledCalibration);
+
+impl PartialEq for ResidualFn {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl core::fmt::Debug for ResidualFn {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("ResidualFn")
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for ResidualFn {
+    fn format(&self, f: defmt::Formatter) {
+        defmt::write!(f, "ResidualFn")
+    }
 }
 
 impl ChainDynamics {
@@ -165,6 +194,7 @@ impl ChainDynamics {
         accelerometer: None,
         tolerance: ChainTolerance::IDENTIFIED,
         design: None,
+        residual: None,
     };
 
     /// Adds a beam mode; [`Error::Chain`] with [`ChainFault::TooManyModes`] past [`MAX_MODES`].
@@ -224,6 +254,25 @@ impl ChainDynamics {
         match self.design {
             Some((fs, design)) if fs == sample_rate_hz => Ok(design),
             _ => Err(chain(ChainStage::Beam, ChainFault::NotDesigned)),
+        }
+    }
+
+    /// The same dynamics with `residual` to compute the bias their equaliser leaves in short
+    /// pulses ([`ChainDynamics::residual_at`]).
+    pub fn with_residual(mut self, residual: ResidualFn) -> Self {
+        self.residual = Some(residual);
+        self
+    }
+
+    /// The bias the equaliser designed at `sample_rate_hz` leaves in short pulses;
+    /// [`SampledCalibration::NONE`] for a rigid chain, or without a design at that rate or a
+    /// [`ResidualFn`].
+    pub fn residual_at(&self, sample_rate_hz: f32) -> SampledCalibration {
+        match (self.design, self.residual) {
+            (Some((fs, design)), Some(f)) if fs == sample_rate_hz && !self.is_rigid() => {
+                (f.0)(self, &design, sample_rate_hz)
+            }
+            _ => SampledCalibration::NONE,
         }
     }
 

@@ -24,6 +24,7 @@ pub mod hertz;
 pub mod material;
 pub mod math;
 pub mod monitor;
+pub mod sampled;
 pub mod scene;
 pub mod thornton;
 pub mod yield_map;

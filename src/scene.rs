@@ -6,11 +6,12 @@ use heapless::{String, Vec};
 use crate::chain_bias::ChainBias;
 use crate::chain_residual::{self, SMOOTH_FROM_SAMPLES};
 use crate::envelope::{Envelope, Range};
-use crate::equaliser::{ChainDynamics, EqualiserDesign};
+use crate::equaliser::{ChainDynamics, EqualiserDesign, ResidualFn};
 use crate::error::{Error, positive, representable};
 use crate::hertz;
 use crate::material::{Material, effective_modulus_pa};
-use crate::math::{self, Backend, DefaultBackend};
+use crate::math::{Backend, DefaultBackend};
+pub use crate::sampled::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
 
 /// Shortest duration, in samples, that is classified: a pulse measured shorter (by more than
 /// three of its sigmas) is rejected as `TooShort`, and a scene whose shortest pulse is shorter
@@ -131,7 +132,9 @@ impl SensorChain {
 
     /// [`SensorChain::with_dynamics`] with the math backend `M`.
     pub fn with_dynamics_in<M: Backend>(mut self, dynamics: ChainDynamics) -> Result<Self, Error> {
-        self.dynamics = dynamics.designed::<M>(self.sample_rate_hz)?;
+        self.dynamics = dynamics
+            .designed::<M>(self.sample_rate_hz)?
+            .with_residual(ResidualFn(chain_residual::residual));
         Ok(self)
     }
 
@@ -242,98 +245,6 @@ pub struct ContactCalibration {
     /// ([`SampledCalibration::NONE`] for the Hertz pulse, whose fit error the detector
     /// carries itself).
     pub sampled: SampledCalibration,
-}
-
-/// Samples per pulse of the first point of a [`SampledCalibration`].
-pub const SAMPLED_FIRST_N: f32 = 2.5;
-
-/// Ratio between consecutive points of a [`SampledCalibration`]: `n_k = 2.5 * 1.6^k`, `k = 0..8`
-/// (2.5 to 67 samples per pulse).
-pub const SAMPLED_STEP: f32 = 1.6;
-
-/// Points of a [`SampledCalibration`].
-pub const SAMPLED_POINTS: usize = 8;
-
-/// A skewed (damped) pulse of few samples is fitted with the symmetric Hertz shape: the peak
-/// and the duration the detector reports then move with the number of samples per pulse `n`
-/// and with the sample's phase. Per point `n_k` ([`SAMPLED_FIRST_N`], [`SAMPLED_STEP`]): the
-/// mean `ln` of the measured over the continuous ratio, and its spread over phases and impacts
-/// (log units), which the classifier adds to the measurement's noise. Linear in `ln n` between
-/// the points and held beyond them. Host-sim measures it with the kernel's own fit on its
-/// integrator's pulses.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct SampledCalibration {
-    /// Mean `ln(F_sampled / F_continuous)` at each point.
-    pub ln_force: [f32; SAMPLED_POINTS],
-    /// Mean `ln(t_sampled / t_continuous)` at each point.
-    pub ln_duration: [f32; SAMPLED_POINTS],
-    /// Spread (standard deviation) of `ln F_sampled` at each point.
-    pub sigma_ln_force: [f32; SAMPLED_POINTS],
-    /// Spread (standard deviation) of `ln t_sampled` at each point.
-    pub sigma_ln_duration: [f32; SAMPLED_POINTS],
-}
-
-impl SampledCalibration {
-    /// No sampling correction.
-    pub const NONE: SampledCalibration = SampledCalibration {
-        ln_force: [0.0; SAMPLED_POINTS],
-        ln_duration: [0.0; SAMPLED_POINTS],
-        sigma_ln_force: [0.0; SAMPLED_POINTS],
-        sigma_ln_duration: [0.0; SAMPLED_POINTS],
-    };
-
-    /// `(ln force, ln duration, sigma ln force, sigma ln duration)` at `ln n` (`n` samples per
-    /// pulse), linear between the points and held beyond them.
-    pub fn at(&self, ln_samples: f32) -> (f32, f32, f32, f32) {
-        const LN_FIRST: f32 = 0.916_290_7; // ln 2.5
-        const LN_STEP: f32 = 0.470_003_6; // ln 1.6
-        let at = math::table_position((ln_samples - LN_FIRST) / LN_STEP, SAMPLED_POINTS);
-        let lerp = |t: &[f32; SAMPLED_POINTS]| math::interpolate(t, at);
-        (
-            lerp(&self.ln_force),
-            lerp(&self.ln_duration),
-            lerp(&self.sigma_ln_force),
-            lerp(&self.sigma_ln_duration),
-        )
-    }
-
-    /// Both corrections at once: the means added, the spreads in quadrature (each kept within
-    /// the ranges a scene accepts, `|ln| <= 2` and `sigma <= 2`).
-    pub fn combined<M: Backend>(&self, other: &SampledCalibration) -> SampledCalibration {
-        let add = |a: &[f32; SAMPLED_POINTS], b: &[f32; SAMPLED_POINTS]| {
-            core::array::from_fn(|k| {
-                let (x, y) = (a.get(k).copied(), b.get(k).copied());
-                (x.unwrap_or(0.0) + y.unwrap_or(0.0)).max(-2.0).min(2.0)
-            })
-        };
-        let quad = |a: &[f32; SAMPLED_POINTS], b: &[f32; SAMPLED_POINTS]| {
-            core::array::from_fn(|k| {
-                let (x, y) = (a.get(k).copied(), b.get(k).copied());
-                let (x, y) = (x.unwrap_or(0.0), y.unwrap_or(0.0));
-                M::sqrt(x * x + y * y).min(2.0)
-            })
-        };
-        SampledCalibration {
-            ln_force: add(&self.ln_force, &other.ln_force),
-            ln_duration: add(&self.ln_duration, &other.ln_duration),
-            sigma_ln_force: quad(&self.sigma_ln_force, &other.sigma_ln_force),
-            sigma_ln_duration: quad(&self.sigma_ln_duration, &other.sigma_ln_duration),
-        }
-    }
-
-    fn check(&self) -> Result<(), Error> {
-        let all = |t: &[f32; SAMPLED_POINTS], lo: f32| {
-            t.iter().all(|v| v.is_finite() && (lo..=2.0).contains(v))
-        };
-        if !(all(&self.ln_force, -2.0) && all(&self.ln_duration, -2.0)) {
-            return Err(Error::OutOfRange("contact.sampled ln ratios (|ln| <= 2)"));
-        }
-        if !(all(&self.sigma_ln_force, 0.0) && all(&self.sigma_ln_duration, 0.0)) {
-            return Err(Error::OutOfRange("contact.sampled sigmas (0..=2)"));
-        }
-        Ok(())
-    }
 }
 
 impl ContactCalibration {
@@ -547,12 +458,6 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         representable(longest * sensor.sample_rate_hz, "longest pulse in samples")?;
         let chain_bias =
             ChainBias::new::<M>(&sensor.dynamics, sensor.sample_rate_hz, shortest, longest);
-        let mut settings = settings;
-        if !equaliser.is_identity() && shortest * sensor.sample_rate_hz < SMOOTH_FROM_SAMPLES {
-            let r =
-                chain_residual::residual::<M>(&sensor.dynamics, &equaliser, sensor.sample_rate_hz);
-            settings.contact.sampled = settings.contact.sampled.combined::<M>(&r);
-        }
         let mut scene = Self {
             plate,
             classes: stored,
@@ -570,6 +475,11 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             longest_duration_s: longest,
             backend: M::default(),
         };
+        if !scene.equaliser.is_identity()
+            && shortest * scene.sensor.sample_rate_hz < SMOOTH_FROM_SAMPLES
+        {
+            add_residual(&mut scene.settings, &scene.sensor);
+        }
         scene.separability = scene.integrate_separability();
         Ok(scene)
     }
@@ -898,4 +808,13 @@ impl<M: Backend> Scene<DEFAULT_CLASSES, M> {
             Settings::default(),
         )
     }
+}
+
+/// Adds the bias the equaliser of `sensor` leaves in short pulses
+/// ([`crate::chain_residual`]) to the settings' sampling correction. Not inlined: a rigid
+/// scene's build never calls it and must not carry its frame.
+#[inline(never)]
+fn add_residual(settings: &mut Settings, sensor: &SensorChain) {
+    let r = sensor.dynamics.residual_at(sensor.sample_rate_hz);
+    settings.contact.sampled = settings.contact.sampled.combined(&r);
 }
