@@ -61,7 +61,7 @@ fn check(chain: &SensorSpec, rel: f64, abs: f64) {
     let fs = chain.sample_rate_hz;
     let k = sensor_to_kernel(chain).unwrap();
     let design = EqualiserDesign::new::<Libm>(&k.dynamics, fs as f32).unwrap();
-    let table = residual::<Libm>(&k.dynamics, &design, fs as f32);
+    let table = residual(&k.dynamics, &design, fs as f32);
     let mut n = SAMPLED_FIRST_N as f64;
     for i in 0..SAMPLED_POINTS {
         let (lf, lt) = (table.ln_force[i] as f64, table.ln_duration[i] as f64);
@@ -111,7 +111,7 @@ fn rigid_has_none() {
     let k = sensor_to_kernel(&chain).unwrap();
     let design = EqualiserDesign::new::<Libm>(&k.dynamics, 26_667.0).unwrap();
     assert_eq!(
-        residual::<Libm>(&k.dynamics, &design, 26_667.0),
+        residual(&k.dynamics, &design, 26_667.0),
         coalshock::SampledCalibration::NONE
     );
 }
