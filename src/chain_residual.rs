@@ -17,7 +17,7 @@
 //!
 //! `sum_j y(x_j) = n S1(0) + 2 n sum_(m >= 1) Re(H(j 2 pi m f_s) e^(j 2 pi m n x_0)) S1(2 pi m n)`.
 //!
-//! The rigid pulse has the same with `R = 1` and `H = 1`. [`crate::detector::shape_fit`] reads each
+//! The rigid pulse has the same with `R = 1` and `H = 1`. [`crate::shape_fit::shape_fit`] reads each
 //! (the largest sample, its larger neighbour and the sum), at [`PHASES`] sample phases; the
 //! mean over phases of `ln(fit of y / fit of P)` is the bias, and its spread over phases
 //! joins the measurement's noise. The integral is a trapezoid rule in `v`, step
@@ -33,10 +33,10 @@
 
 use crate::chain_bias::{HERTZ_SPECTRUM, MAX_V, STEP_V, chain_term};
 use crate::complex::{C, cis};
-use crate::detector::shape_fit;
 use crate::equaliser::{ChainDynamics, EqualiserDesign};
 use crate::math::{self, Backend, Libm as M};
-use crate::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
+use crate::sampled::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
+use crate::shape_fit::shape_fit;
 
 /// Sample phases averaged per point.
 pub const PHASES: usize = 8;

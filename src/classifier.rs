@@ -2,7 +2,8 @@
 
 use crate::envelope::{Inverted, NoiseXy, Side};
 use crate::math::Backend;
-use crate::scene::{SampledCalibration, Scene};
+use crate::sampled::SampledCalibration;
+use crate::scene::Scene;
 
 /// A pulse the detector measured: peak contact force and contact duration, with their
 /// standard deviations in log units (from the noise and the sampling).

@@ -26,6 +26,7 @@ pub mod math;
 pub mod monitor;
 pub mod sampled;
 pub mod scene;
+pub mod shape_fit;
 pub mod thornton;
 pub mod yield_map;
 
