@@ -585,9 +585,11 @@ fn main() -> ! {
 
     // The chain scene (default backend): its build and quiet blocks timed, then its stream,
     // logged with the prefix `chain `.
+    let base = rt::paint();
     let t0 = stamp();
     let built = build_chain_scene::<DefaultBackend>();
     let chain_scene_ticks = stamp() - t0;
+    let stack_chain_scene = rt::used_since(base);
     let Ok(chain_scene) = built else { refused() };
     let (chain_quiet, chain_quiet_events) = quiet_blocks(chain_scene.clone());
     let chain = chain_pass(&CHAIN, chain_scene);
@@ -623,6 +625,7 @@ fn main() -> ! {
     report("", default, &clock);
     // Quiet blocks through `feed_slice` on the chain scene, as `insns_quiet_block_sample_mean`.
     measure("insns_chain_scene_build", clock.insns(chain_scene_ticks, 1));
+    measure("stack_chain_scene_bytes", stack_chain_scene as u64);
     measure(
         "insns_quiet_block_sample_chain_mean",
         clock
