@@ -1,38 +1,37 @@
 //! Host-side (std, `f64`) companion of the coalshock kernel: an independent Hertz impact
 //! model and contact integrator used to generate and check pulses.
+//!
+//! # Layers
+//!
+//! Each layer imports only the layers listed before it (`tests/layers.rs` checks it):
+//!
+//! 1. [`physics`]: Hertz's closed forms, the contact laws and the contact integrator;
+//! 2. [`scene`]: the TOML scene file;
+//! 3. [`sim`]: the sensor chain, labelled streams and their files;
+//! 4. [`bridge`]: the contact calibration and the conversion to the kernel's f32 scene;
+//! 5. [`score`]: the kernel scored on simulated impacts against its limits;
+//! 6. [`report`]: tables, CSV files and plots;
+//! 7. [`cli`]: the command lines of `impact` and `caving` (the binary, `main.rs`, holds the rest).
+//!
+//! Every module is also reachable at the crate's root (`host_sim::hertz64`), as before the
+//! layers were drawn.
 
-pub mod bayes;
-pub mod calibrate;
-pub mod caving;
-pub mod caving_cli;
-pub mod convert;
-pub mod counts;
-pub mod crb;
-pub mod cusum;
-pub mod evaluate;
-mod events;
-pub mod export;
-pub mod hertz64;
-pub mod identify;
-pub mod impact;
-pub mod impact_cli;
-pub mod impact_row;
-pub mod integrate;
-pub mod integrator_cases;
-pub mod law_spec;
-pub mod laws;
-pub mod mismatch;
-pub mod paper;
-pub mod par;
-pub mod plasticity;
-pub mod reference;
-pub mod reliability;
-pub mod saturation;
+pub mod bridge;
+pub mod cli;
+pub mod physics;
+pub mod report;
 pub mod scene;
-pub mod sensor;
-pub mod sim_error;
-pub mod speed;
-pub mod stream;
-pub mod thornton;
-pub mod tradeoff;
-pub mod yield_bayes;
+pub mod score;
+pub mod sim;
+
+pub use bridge::{calibrate, convert};
+pub use cli::{caving_cli, impact_cli};
+pub use physics::{
+    hertz64, impact, integrate, integrator_cases, law_spec, laws, sim_error, thornton,
+};
+pub use report::{export, impact_row, paper, plasticity, speed, tradeoff};
+pub use score::{
+    bayes, caving, counts, crb, cusum, evaluate, mismatch, reference, reliability, saturation,
+    yield_bayes,
+};
+pub use sim::{identify, par, sensor, stream};

@@ -39,7 +39,7 @@
 //! `f32` must lie within its bounds ([`KERNEL_RANGE`]: a non-zero size from 1e-30 to 1e30),
 //! and so must each class's Hertz closed forms at the corners of its ranges. [`SceneFile::paper`] and [`SceneFile::paper_narrow`] are the
 //! built-in scenes, equal to `scenes/paper.toml` and `scenes/paper_narrow.toml` and, once
-//! converted ([`crate::convert`]), to the kernel's `Scene::paper()` and `Scene::paper_narrow()`.
+//! converted (by the `bridge::convert` layer above), to the kernel's `Scene::paper()` and `Scene::paper_narrow()`.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -47,10 +47,10 @@ use std::path::{Path, PathBuf};
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::hertz64::Material64;
-use crate::law_spec::LawSpec;
-use crate::laws::RestitutionModel;
-use crate::sim_error::SimError;
+use crate::physics::hertz64::Material64;
+use crate::physics::law_spec::LawSpec;
+use crate::physics::laws::RestitutionModel;
+use crate::physics::sim_error::SimError;
 
 /// Longest class name in bytes (the kernel's `coalshock::scene::NAME_LEN`).
 pub const MAX_CLASS_NAME_BYTES: usize = coalshock::scene::NAME_LEN;
@@ -549,7 +549,7 @@ impl ClassSpec {
 /// Free-fall speed `u = sqrt(2 g h)` in m/s after a drop of `height_m` (m),
 /// `g = 9.80665 m/s^2`.
 pub fn drop_speed_m_s(height_m: f64) -> f64 {
-    (2.0 * crate::hertz64::STANDARD_GRAVITY_M_S2 * height_m).sqrt()
+    (2.0 * crate::physics::hertz64::STANDARD_GRAVITY_M_S2 * height_m).sqrt()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -715,7 +715,7 @@ pub struct ChainToleranceSpec {
 }
 
 /// The sensor chain (`[sensor]`): contact force -> beam -> accelerometer -> sampling -> noise
-/// -> offset and drift -> ADC (see [`crate::sensor`]).
+/// -> offset and drift -> ADC (see `sim::sensor`, the layer above).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorSpec {
@@ -1187,10 +1187,10 @@ fn class_closed_forms_fit(
 ) -> Result<(), SceneError> {
     let m = c.material.material();
     let u = c.speed_range_m_s();
-    let e_star = crate::hertz64::effective_modulus_pa(&m, plate);
+    let e_star = crate::physics::hertz64::effective_modulus_pa(&m, plate);
     for r in [c.radius_m.min, c.radius_m.max] {
         for u in [u.min, u.max] {
-            let Ok(hz) = crate::hertz64::HertzImpact64::new(&m, plate, r, u) else {
+            let Ok(hz) = crate::physics::hertz64::HertzImpact64::new(&m, plate, r, u) else {
                 continue;
             };
             let d = hz.delta_max_m;

@@ -1,0 +1,471 @@
+//! The calibration of a damped contact against the undamped Hertz model, as the kernel's
+//! detector measures a pulse: for each impact the ratios measured / Hertz of
+//!
+//! - the peak force, `F_peak / F_max`;
+//! - the duration from the area, `(A / (C_AREA F_peak)) / t_c`, with `A = integral F dt`;
+//! - the shape ratio `q = (E / (C_ENERGY F_peak^2)) / (A / (C_AREA F_peak))`, `E = integral F^2 dt`
+//!   (1 for the Hertz pulse).
+//!
+//! For a class whose contact yields (Thornton's law) the reference is the kernel's own model of
+//! it, Thornton's undamped closed forms `F*` and `t_c` ([`ThorntonImpact64`]) in place of
+//! Hertz's: the kernel's envelope already follows the yield, and the ratios are what is left,
+//! the detector's Hertz area and energy constants read on the flatter yielding pulse (its
+//! duration about 12 % long) and any damping.
+//!
+//! The pulse comes from the f64 integrator with the scene's law; `C_AREA` and `C_ENERGY` are the
+//! closed forms of the Hertz pulse (written here from their formulas, not taken from the
+//! kernel). For the restitution-parametrised laws the ratios depend on the restitution alone;
+//! for Adams (a fixed `c_max` and penetration depth) they vary with size and speed, which the
+//! reported spread shows.
+
+use coalshock::detector::shape_fit;
+use coalshock::math::Libm;
+use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
+
+use crate::physics::hertz64::HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR;
+use crate::physics::impact::{ImpactSpec, simulate};
+use crate::physics::integrate::SimError;
+use crate::physics::law_spec::LawSpec;
+use crate::physics::thornton::ThorntonImpact64;
+use crate::scene::{ContactLaw, SceneFile};
+
+/// Area of the Hertz pulse over `F_max t_c`: `1.6 / 2.9432752` (the impulse `2 m u`).
+pub const C_AREA: f64 = 1.6 / CONTACT_TIME_FACTOR;
+
+/// Energy `integral F^2 dt` of the Hertz pulse over `F_max^2 t_c`:
+/// `2 B(8/5, 1/2) / (2.5 * 2.9432752)`, `B(8/5, 1/2) = Gamma(8/5) sqrt(pi) / Gamma(21/10)`.
+pub const C_ENERGY: f64 = 2.0 * 0.893_515_349_287_690_3 * 1.772_453_850_905_516
+    / 1.046_485_846_853_560_7
+    / (2.5 * CONTACT_TIME_FACTOR);
+
+/// From this many samples in the scene's shortest pulse on, the kernel's detector fits a
+/// smoothed top instead of the Hertz shape through three samples (`detector::smooth_fit`).
+const SMOOTH_FROM_SAMPLES: f64 = 24.0;
+
+/// Sample phases per point of [`sampled_calibration`].
+pub const SAMPLED_PHASES: usize = 16;
+
+/// The sampling correction of a damped contact, per point `n_k = 2.5 * 1.6^k` samples per
+/// pulse (`coalshock::SampledCalibration`): mean and spread of `ln(measured / continuous)` of
+/// the peak force and the duration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sampled64 {
+    /// Mean `ln(F_fit / F_peak)`.
+    pub ln_force: [f64; SAMPLED_POINTS],
+    /// Mean `ln(t_fit / t_area)`.
+    pub ln_duration: [f64; SAMPLED_POINTS],
+    /// Standard deviation of `ln(F_fit / F_peak)` over phases and impacts.
+    pub sigma_ln_force: [f64; SAMPLED_POINTS],
+    /// Standard deviation of `ln(t_fit / t_area)` over phases and impacts.
+    pub sigma_ln_duration: [f64; SAMPLED_POINTS],
+}
+
+/// One calibration impact's continuous pulse: its force series `(t_s, force_n)`, its peak (N)
+/// and its duration from the area `area / (C_AREA F_peak)` (s).
+pub struct ContinuousPulse<'a> {
+    /// `(t_s, force_n)`, sorted by time.
+    pub series: &'a [(f64, f64)],
+    /// Largest force.
+    pub peak_n: f64,
+    /// `area / (C_AREA peak_n)`.
+    pub duration_s: f64,
+}
+
+/// What the kernel's Hertz-shape fit (`coalshock::detector::shape_fit`) reports for the pulses
+/// sampled at `n_k` samples of their own duration each, at [`SAMPLED_PHASES`] phases: the mean
+/// and the standard deviation of `ln(F_fit / F_peak)` and `ln(t_fit / t_area)` over phases and
+/// pulses. The fit assumes the symmetric Hertz shape; a damped pulse rises faster than it falls,
+/// and at a few samples per pulse the fit then reads it low and short by an amount that depends
+/// on `n` (the kernel divides it out per pulse).
+pub fn sampled_calibration(pulses: &[ContinuousPulse]) -> Sampled64 {
+    let mut out = Sampled64 {
+        ln_force: [0.0; SAMPLED_POINTS],
+        ln_duration: [0.0; SAMPLED_POINTS],
+        sigma_ln_force: [0.0; SAMPLED_POINTS],
+        sigma_ln_duration: [0.0; SAMPLED_POINTS],
+    };
+    for k in 0..SAMPLED_POINTS {
+        let n = SAMPLED_FIRST_N as f64 * (SAMPLED_STEP as f64).powi(k as i32);
+        let (mut f, mut t) = (Vec::new(), Vec::new());
+        for p in pulses {
+            let dt = p.duration_s / n;
+            for phase in 0..SAMPLED_PHASES {
+                if let Some((peak, samples)) = fit_sampled(p.series, dt, phase) {
+                    f.push((peak / p.peak_n).ln());
+                    t.push((samples * dt / p.duration_s).ln());
+                }
+            }
+        }
+        (out.ln_force[k], out.sigma_ln_force[k]) = mean_and_sigma(&f);
+        (out.ln_duration[k], out.sigma_ln_duration[k]) = mean_and_sigma(&t);
+    }
+    out
+}
+
+/// The kernel's fit of `series` sampled every `dt` from phase `phase / SAMPLED_PHASES`: peak
+/// (N) and duration (samples).
+fn fit_sampled(series: &[(f64, f64)], dt: f64, phase: usize) -> Option<(f64, f64)> {
+    let last = series.last()?.0;
+    let mut t = series.first()?.0 + dt * phase as f64 / SAMPLED_PHASES as f64;
+    let mut v = Vec::new();
+    while t < last {
+        v.push(force_at(series, t));
+        t += dt;
+    }
+    let (i, &top) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    let before = if i > 0 { v[i - 1] } else { 0.0 };
+    let after = v.get(i + 1).copied().unwrap_or(0.0);
+    let sum: f64 = v.iter().sum();
+    let (peak, samples) = shape_fit::<Libm>(top as f32, before as f32, after as f32, sum as f32)?;
+    Some((peak as f64, samples as f64))
+}
+
+/// Mean and standard deviation of `v` (0 and 0 when empty).
+fn mean_and_sigma(v: &[f64]) -> (f64, f64) {
+    if v.is_empty() {
+        return (0.0, 0.0);
+    }
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n;
+    (m, var.sqrt())
+}
+
+/// Points recorded per Hertz contact time when a pulse is integrated for calibration.
+const POINTS_PER_PULSE: f64 = 4000.0;
+
+/// The three ratios of one impact (dimensionless).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PulseRatios {
+    /// Peak force over the Hertz `F_max`.
+    pub force: f64,
+    /// Duration from the area over the Hertz `t_c`.
+    pub duration: f64,
+    /// Shape ratio `q`.
+    pub shape: f64,
+}
+
+/// The calibration of a scene's contact: the geometric means of the ratios over its classes'
+/// corners and centres, and the largest `|ln|` deviation of any impact from them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Calibration64 {
+    /// Geometric-mean ratios.
+    pub ratios: PulseRatios,
+    /// Largest `|ln ratio - ln mean|` of each ratio over the impacts (log units).
+    pub spread_ln: PulseRatios,
+    /// Impacts integrated.
+    pub impacts: usize,
+    /// Largest deviation of the shape ratio's log when the impacts' pulses are sampled at the
+    /// scene's rate ([`sampled_shape_spread`]).
+    pub sampled_shape_spread: f64,
+    /// What sampling at few samples per pulse adds ([`sampled_calibration`]); `None` when the
+    /// scene's shortest pulse has 24 samples or more (the detector then fits a smoothed top,
+    /// whose error does not depend on the pulse's skew).
+    pub sampled: Option<Sampled64>,
+    /// Mean skewness of the impacts' whole pulses (above 0.5 % of the peak; 0 for Hertz).
+    pub skewness: f64,
+    /// Largest distance of one impact's skewness from the mean.
+    pub skewness_spread: f64,
+    /// The most negative second difference `v[i-1] - 2 v[i] + v[i+1]` of any impact's pulse
+    /// sampled at the scene's rate (16 sample phases), over its peak, negated: how sharply the
+    /// contact's own pulse bends (0.02-0.2 for Hertz, about 0.56 for Adams with `d = 1e-5 m`
+    /// at 100 kS/s).
+    pub sharpest_bend: f64,
+    /// Geometric mean over the impacts of the duration from the area with the Hertz shape
+    /// over the pulse's own duration (1 for Hertz; about 1.12 for a yielding pulse, which is
+    /// flatter): the kernel's `Settings::area_ratio` for a scene that yields.
+    pub area_ratio: f64,
+    /// Geometric mean over the impacts of the time the force stays within 2 % of its peak,
+    /// as a fraction of the pulse's duration, over the same of the Hertz pulse
+    /// ([`hertz_top_fraction`]): how much broader the contact's own top is (about 2-3 for a
+    /// yielding pulse). The kernel's `Settings::flat_top_ratio` for a scene that yields.
+    pub flat_top_ratio: f64,
+}
+
+/// The fraction of its contact time a Hertz pulse spends within 2 % of its peak:
+/// `F >= 0.98 F_max` where `delta >= x0 delta_max`, `x0 = 0.98^(2/3)`, so the fraction is
+/// `2 integral_x0^1 dx / sqrt(1 - x^(5/2)) / 2.9432752` (in units `delta_max / u`), taken with
+/// `x = 1 - w^2` (a smooth integrand) by Simpson's rule on 400 intervals: 0.0995.
+pub fn hertz_top_fraction() -> f64 {
+    let x0 = 0.98f64.powf(2.0 / 3.0);
+    let top = (1.0 - x0).sqrt();
+    let f = |w: f64| {
+        if w <= 0.0 {
+            // 2 w / sqrt(1 - (1 - w^2)^(5/2)) -> 2 / sqrt(5/2) as w -> 0.
+            2.0 / 2.5f64.sqrt()
+        } else {
+            2.0 * w / (1.0 - (1.0 - w * w).powf(2.5)).sqrt()
+        }
+    };
+    let n = 400;
+    let h = top / n as f64;
+    let mut sum = f(0.0) + f(top);
+    for k in 1..n {
+        sum += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    2.0 * sum * h / 3.0 / CONTACT_TIME_FACTOR
+}
+
+/// The time the force series `series` (`(t_s, force_n)`, uniformly spaced) stays within 2 %
+/// of its peak, as a fraction of `duration_s`.
+fn top_fraction(series: &[(f64, f64)], duration_s: f64) -> f64 {
+    let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
+    let dt = match (series.first(), series.get(1)) {
+        (Some(a), Some(b)) => b.0 - a.0,
+        _ => return 0.0,
+    };
+    let above = series.iter().filter(|p| p.1 >= 0.98 * peak).count();
+    above as f64 * dt / duration_s
+}
+
+/// Skewness `E[(t - mu)^3] / E[(t - mu)^2]^(3/2)` of the force series `series`
+/// (`(t_s, force_n)`, uniformly spaced) weighted by the force, over the points above
+/// `cut` times the peak (as the detector takes the part above its trigger level).
+pub fn skewness(series: &[(f64, f64)], cut: f64) -> f64 {
+    let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
+    let above = || series.iter().filter(|p| p.1 > cut * peak);
+    let m0: f64 = above().map(|p| p.1).sum();
+    if m0 <= 0.0 {
+        return 0.0;
+    }
+    let mu = above().map(|p| p.0 * p.1).sum::<f64>() / m0;
+    let var = above().map(|p| (p.0 - mu).powi(2) * p.1).sum::<f64>() / m0;
+    let third = above().map(|p| (p.0 - mu).powi(3) * p.1).sum::<f64>() / m0;
+    if var > 0.0 {
+        third / var.powf(1.5)
+    } else {
+        0.0
+    }
+}
+
+/// The force of the series `series` (`(t_s, force_n)`, sorted by time) at `t_s`, linearly
+/// interpolated and clamped at zero; 0 outside the series.
+fn force_at(series: &[(f64, f64)], t_s: f64) -> f64 {
+    let (Some(first), Some(last)) = (series.first(), series.last()) else {
+        return 0.0;
+    };
+    if t_s <= first.0 || t_s >= last.0 {
+        return 0.0;
+    }
+    let i = series
+        .partition_point(|p| p.0 <= t_s)
+        .clamp(1, series.len() - 1);
+    let (a, b) = (series[i - 1], series[i]);
+    (a.1 + (b.1 - a.1) * (t_s - a.0) / (b.0 - a.0)).max(0.0)
+}
+
+/// The largest `|ln q_sampled - ln q|` of the force series `series` (`(t_s, force_n)`) sampled
+/// every `1 / sample_rate_hz` at 16 phases: `q_sampled = (sum v^2 / (C_ENERGY F^2)) /
+/// (sum v / (C_AREA F))` with the series' own peak `F`, against the same from the fine series.
+/// A skewed pulse of a few samples sums unevenly; the detector's shape check must allow it.
+pub fn sampled_shape_spread(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
+    let (Some(first), Some(last)) = (series.first(), series.last()) else {
+        return 0.0;
+    };
+    let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
+    if peak <= 0.0 || sample_rate_hz.is_nan() || sample_rate_hz <= 0.0 {
+        return 0.0;
+    }
+    let ln_q = |sum: f64, sum_sq: f64| (sum_sq * C_AREA / (sum * peak * C_ENERGY)).ln();
+    let fine_sum: f64 = series.iter().map(|p| p.1.max(0.0)).sum();
+    let fine_sq: f64 = series.iter().map(|p| p.1.max(0.0).powi(2)).sum();
+    let reference = ln_q(fine_sum, fine_sq);
+    let dt = 1.0 / sample_rate_hz;
+    let at = |t: f64| force_at(series, t);
+    let mut worst = 0.0f64;
+    for k in 0..16 {
+        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        let mut t = first.0 + dt * k as f64 / 16.0;
+        while t < last.0 {
+            let v = at(t);
+            sum += v;
+            sum_sq += v * v;
+            t += dt;
+        }
+        if sum > 0.0 {
+            worst = worst.max((ln_q(sum, sum_sq) - reference).abs());
+        }
+    }
+    worst
+}
+
+/// The most negative second difference of the force series `series` (`(t_s, force_n)`)
+/// sampled every `1 / sample_rate_hz` at 16 phases, over its peak, negated (0 or more).
+pub fn sharpest_bend(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
+    let (Some(first), Some(last)) = (series.first(), series.last()) else {
+        return 0.0;
+    };
+    let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
+    if peak <= 0.0 || sample_rate_hz.is_nan() || sample_rate_hz <= 0.0 {
+        return 0.0;
+    }
+    let dt = 1.0 / sample_rate_hz;
+    let at = |t: f64| force_at(series, t);
+    let mut worst = 0.0f64;
+    for k in 0..16 {
+        let mut t = first.0 - 2.0 * dt + dt * k as f64 / 16.0;
+        let (mut prev, mut mid) = (at(t - dt), at(t));
+        while t <= last.0 + dt {
+            let next = at(t + dt);
+            worst = worst.min(prev + next - 2.0 * mid);
+            (prev, mid) = (mid, next);
+            t += dt;
+        }
+    }
+    -worst / peak
+}
+
+/// The ratios of one impact, from its integrated force-time series (trapezoid sums on
+/// `POINTS_PER_PULSE` points per Hertz contact time), against the Hertz impact, or against
+/// Thornton's undamped impact for [`LawSpec::Thornton`].
+pub fn pulse_ratios(spec: &ImpactSpec) -> Result<PulseRatios, SimError> {
+    pulse_ratios_and_series(spec).map(|p| p.ratios)
+}
+
+/// One integrated impact as the calibration sees it.
+struct Pulse64 {
+    /// Its ratios ([`pulse_ratios`]).
+    ratios: PulseRatios,
+    /// Its force-time series `(t_s, force_n)`.
+    series: Vec<(f64, f64)>,
+    /// The duration from the area with the Hertz shape over the pulse's own duration
+    /// (first contact to the force's first zero after its peak): `A / (C_AREA F_peak t_pulse)`.
+    area_ratio: f64,
+    /// The time within 2 % of the peak over the pulse's duration.
+    top_fraction: f64,
+    /// The pulse's peak force in N.
+    peak_n: f64,
+    /// Its duration from the area with the Hertz shape, `A / (C_AREA F_peak)`, in s.
+    area_duration_s: f64,
+}
+
+/// [`pulse_ratios`], the force-time series it was computed from and the pulse's area ratio.
+fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
+    let hertz = spec.hertz()?;
+    let (reference_force_n, reference_duration_s) = match spec.law {
+        LawSpec::Thornton {
+            yield_pressure_pa, ..
+        } => {
+            let t = ThorntonImpact64::new(&hertz, yield_pressure_pa)?;
+            (t.peak_force_n, t.duration_s)
+        }
+        _ => (hertz.peak_force_n, hertz.duration_s),
+    };
+    let mut spec = spec.clone();
+    spec.record = Some(hertz.duration_s / POINTS_PER_PULSE);
+    let report = simulate(&spec)?;
+    let series = report.force_series.unwrap_or_default();
+    let (mut area, mut energy, mut peak) = (0.0f64, 0.0f64, 0.0f64);
+    for w in series.windows(2) {
+        let (t0, f0) = (w[0].0, w[0].1.max(0.0));
+        let (t1, f1) = (w[1].0, w[1].1.max(0.0));
+        area += 0.5 * (t1 - t0) * (f0 + f1);
+        energy += 0.5 * (t1 - t0) * (f0 * f0 + f1 * f1);
+        peak = peak.max(f1);
+    }
+    let peak = peak.max(report.peak_force_n);
+    let t_area = area / (C_AREA * peak);
+    let t_energy = energy / (C_ENERGY * peak * peak);
+    let top_fraction = top_fraction(&series, report.pulse_duration_s);
+    Ok(Pulse64 {
+        ratios: PulseRatios {
+            force: peak / reference_force_n,
+            duration: t_area / reference_duration_s,
+            shape: t_energy / t_area,
+        },
+        series,
+        area_ratio: t_area / report.pulse_duration_s,
+        top_fraction,
+        peak_n: peak,
+        area_duration_s: t_area,
+    })
+}
+
+/// The calibration of `scene`'s contact law, or `None` for the undamped Hertz law with no
+/// yielding class (the kernel's own model: every ratio is 1). Integrates each class, with its
+/// own law ([`SceneFile::class_law`]), at radius {min, geometric centre, max} x speed {min,
+/// centre, max}.
+pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
+    if scene.contact == ContactLaw::Hertz && !scene.yields() {
+        return Ok(None);
+    }
+    let plate = scene.plate.material();
+    let mut all = Vec::new();
+    let mut skews = Vec::new();
+    let mut bend = 0.0f64;
+    let mut sampled = 0.0f64;
+    let mut pulses = Vec::new();
+    let mut shortest_s = f64::INFINITY;
+    let mut ln_area_ratio = 0.0f64;
+    let mut ln_top = 0.0f64;
+    for (i, class) in scene.classes.iter().enumerate() {
+        let (r, u) = (class.radius_m, class.speed_range_m_s());
+        for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
+            for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
+                let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
+                spec.law = scene.class_law(i)?;
+                let Pulse64 {
+                    ratios,
+                    series,
+                    area_ratio,
+                    top_fraction,
+                    peak_n,
+                    area_duration_s,
+                } = pulse_ratios_and_series(&spec)?;
+                ln_area_ratio += area_ratio.ln();
+                ln_top += (top_fraction / hertz_top_fraction()).ln();
+                shortest_s = shortest_s.min(spec.hertz()?.duration_s);
+                pulses.push((peak_n, area_duration_s));
+                bend = bend.max(sharpest_bend(&series, scene.sensor.sample_rate_hz));
+                skews.push(skewness(&series, 0.005));
+                sampled = sampled.max(sampled_shape_spread(&series, scene.sensor.sample_rate_hz));
+                all.push((ratios, series));
+            }
+        }
+    }
+    let fs = scene.sensor.sample_rate_hz;
+    let sampled_fit = (shortest_s * fs < SMOOTH_FROM_SAMPLES).then(|| {
+        let continuous: Vec<ContinuousPulse> = all
+            .iter()
+            .zip(&pulses)
+            .map(|((_, series), &(peak_n, duration_s))| ContinuousPulse {
+                series,
+                peak_n,
+                duration_s,
+            })
+            .collect();
+        sampled_calibration(&continuous)
+    });
+    let all: Vec<PulseRatios> = all.into_iter().map(|(r, _)| r).collect();
+    let n = all.len() as f64;
+    let mean = |f: fn(&PulseRatios) -> f64| all.iter().map(|p| f(p).ln()).sum::<f64>() / n;
+    let (lf, ld, ls) = (mean(|p| p.force), mean(|p| p.duration), mean(|p| p.shape));
+    let spread = |f: fn(&PulseRatios) -> f64, m: f64| {
+        all.iter()
+            .map(|p| (f(p).ln() - m).abs())
+            .fold(0.0, f64::max)
+    };
+    Ok(Some(Calibration64 {
+        ratios: PulseRatios {
+            force: lf.exp(),
+            duration: ld.exp(),
+            shape: ls.exp(),
+        },
+        spread_ln: PulseRatios {
+            force: spread(|p| p.force, lf),
+            duration: spread(|p| p.duration, ld),
+            shape: spread(|p| p.shape, ls),
+        },
+        impacts: all.len(),
+        skewness: skews.iter().sum::<f64>() / n,
+        skewness_spread: {
+            let m = skews.iter().sum::<f64>() / n;
+            skews.iter().map(|s| (s - m).abs()).fold(0.0, f64::max)
+        },
+        sharpest_bend: bend,
+        sampled_shape_spread: sampled,
+        sampled: sampled_fit,
+        area_ratio: (ln_area_ratio / n).exp(),
+        flat_top_ratio: (ln_top / n).exp(),
+    }))
+}

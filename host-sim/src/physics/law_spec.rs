@@ -1,0 +1,248 @@
+//! How a scene or the CLI states a contact law (`LawSpec`), and the force law it builds; the
+//! Adams law tuned to a restitution is found by running the integrator
+//! ([`adams_for_restitution`]), so this sits above both `laws` and `integrate`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::physics::hertz64::{HERTZ_TC_FACTOR, HertzImpact64, positive};
+use crate::physics::integrate::{ContactProblem, Limits, Method, Tolerance, integrate_contact};
+use crate::physics::laws::{ForceLaw, RestitutionModel};
+use crate::physics::sim_error::SimError;
+use crate::physics::thornton::ThorntonContact;
+
+/// An Adams IMPACT law whose `c_max` (N s/m) makes a gravity-free impact of a sphere of mass
+/// `mass_kg` (kg) at `speed_m_s` (m/s) rebound with coefficient of restitution
+/// `restitution` in (0, 1).
+///
+/// Adams has no closed form for this, so `c_max` is found numerically: the impact is
+/// simulated with Dormand-Prince 5(4) at rtol = atol = 1e-10 (scaled state, stopping at
+/// the kink) and the simulated restitution `e(c_max)`, which falls monotonically from 1 at
+/// `c_max = 0`, is solved for the target by bracketed regula falsi (Illinois) on
+/// `ln c_max`, starting from the linear-oscillator estimate
+/// `c = 2 zeta m pi / t_c`, `zeta = -ln e / sqrt(pi^2 + ln^2 e)`, until
+/// `|e(c_max) - e| <= 1e-9`. The restitution of the result depends on the speed: it is
+/// the target only at `speed_m_s`.
+pub fn adams_for_restitution(
+    stiffness: f64,
+    exponent: f64,
+    d_m: f64,
+    mass_kg: f64,
+    speed_m_s: f64,
+    restitution: f64,
+) -> Result<ForceLaw, SimError> {
+    if !(restitution > 0.0 && restitution < 1.0) {
+        return Err(SimError::InvalidParameter {
+            name: "restitution".to_string(),
+            value: restitution,
+            requirement: "in (0, 1) for a damped Adams law",
+        });
+    }
+    let make = |c: f64| ForceLaw::AdamsImpact {
+        stiffness,
+        exponent,
+        c_max_n_s_m: c,
+        d_m,
+    };
+    make(1.0).validate()?;
+    positive("mass_kg", mass_kg)?;
+    positive("speed_m_s", speed_m_s)?;
+    let tol = Tolerance::new(1e-10);
+    let limits = Limits::default();
+    // g(ln c) = e(c) - e_target, decreasing in ln c.
+    let eval = |ln_c: f64| -> Result<f64, SimError> {
+        let problem = ContactProblem {
+            law: make(ln_c.exp()),
+            mass_kg,
+            speed_m_s,
+            gravity_m_s2: 0.0,
+        };
+        let sol = integrate_contact(&problem, Method::Dopri5, tol, &limits)?;
+        Ok(sol.restitution() - restitution)
+    };
+    // Linear-oscillator first guess with the Hertz contact time.
+    let hz = HertzImpact64::from_stiffness_mass(stiffness, mass_kg, speed_m_s)?;
+    let le = restitution.ln();
+    let zeta = -le / (core::f64::consts::PI.powi(2) + le * le).sqrt();
+    let t_c = HERTZ_TC_FACTOR * hz.delta_max_m / speed_m_s;
+    let c0 = 2.0 * zeta * mass_kg * core::f64::consts::PI / t_c;
+    let step = 4.0_f64.ln();
+    let (mut a, mut ga) = (c0.ln(), eval(c0.ln())?);
+    let (mut b, mut gb);
+    if ga > 0.0 {
+        // Not damped enough: raise c until e falls below the target.
+        b = a;
+        gb = ga;
+        let mut n = 0;
+        while gb > 0.0 {
+            a = b;
+            ga = gb;
+            b += step;
+            gb = eval(b)?;
+            n += 1;
+            if n > 40 {
+                return Err(SimError::RestitutionNotBracketed {
+                    target: restitution,
+                    reached: gb + restitution,
+                });
+            }
+        }
+    } else {
+        b = a;
+        gb = ga;
+        let mut n = 0;
+        while ga <= 0.0 {
+            b = a;
+            gb = ga;
+            a -= step;
+            ga = eval(a)?;
+            n += 1;
+            if n > 40 {
+                return Err(SimError::RestitutionNotBracketed {
+                    target: restitution,
+                    reached: ga + restitution,
+                });
+            }
+        }
+    }
+    if gb == 0.0 {
+        return Ok(make(b.exp()));
+    }
+    // Illinois on [a, b] with ga > 0 > gb.
+    let mut best = if ga.abs() < gb.abs() { a } else { b };
+    for _ in 0..100 {
+        let mut x = b - gb * (b - a) / (gb - ga);
+        if !(x > a.min(b) && x < a.max(b)) {
+            x = 0.5 * (a + b);
+        }
+        let gx = eval(x)?;
+        best = x;
+        if gx.abs() <= 1e-9 || (b - a).abs() < 1e-13 {
+            break;
+        }
+        if gx * gb < 0.0 {
+            a = b;
+            ga = gb;
+        } else {
+            ga *= 0.5;
+        }
+        b = x;
+        gb = gx;
+    }
+    Ok(make(best.exp()))
+}
+
+/// The user's choice of contact law, independent of the scene; [`LawSpec::build`] makes the
+/// concrete [`ForceLaw`] with the scene's Hertz stiffness `k = 4/3 E* sqrt(R)`, exponent 1.5,
+/// mass and impact speed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum LawSpec {
+    /// Undamped Hertz `F = k delta^1.5` (restitution 1).
+    Hertz,
+    /// Adams IMPACT with an explicit full damping `c_max_n_s_m` (N s/m) reached at `d_m` (m).
+    Adams {
+        /// `c_max` in N s/m.
+        c_max_n_s_m: f64,
+        /// `d` in m (Adams suggests about 1e-5 m).
+        d_m: f64,
+    },
+    /// Adams IMPACT with `c_max` chosen so that this scene rebounds with `restitution`
+    /// (see [`adams_for_restitution`]).
+    AdamsRestitution {
+        /// Target coefficient of restitution in (0, 1).
+        restitution: f64,
+        /// `d` in m.
+        d_m: f64,
+    },
+    /// Hunt-Crossley, `chi = 3 (1 - e)/2`.
+    HuntCrossley {
+        /// Target coefficient of restitution `e`.
+        restitution: f64,
+    },
+    /// Lankarani-Nikravesh, `chi = 3 (1 - e^2)/4`.
+    LankaraniNikravesh {
+        /// Target coefficient of restitution `e`.
+        restitution: f64,
+    },
+    /// Flores et al., `chi = 8 (1 - e)/(5 e)`.
+    Flores {
+        /// Target coefficient of restitution `e`.
+        restitution: f64,
+    },
+    /// Gonthier et al., `chi = (1 - e^2)/e`.
+    Gonthier {
+        /// Target coefficient of restitution `e`.
+        restitution: f64,
+    },
+    /// DEM Tsuji / Hertz-Mindlin damping with `beta(e)`.
+    Tsuji {
+        /// Target coefficient of restitution `e`.
+        restitution: f64,
+    },
+    /// Thornton's elastic-perfectly-plastic contact with limiting contact pressure
+    /// `yield_pressure_pa` (Pa), optionally times the hysteresis damping
+    /// `(1 + chi delta_dot / u)` of a restitution model (see [`crate::physics::thornton`]). Needs the
+    /// scene's `E*` and `R` (a [`HertzImpact64::new`]).
+    Thornton {
+        /// Limiting contact pressure `p_y` in Pa.
+        yield_pressure_pa: f64,
+        /// The viscous part: `chi = model.chi(restitution)`, or none.
+        damping: Option<(RestitutionModel, f64)>,
+    },
+}
+
+impl LawSpec {
+    /// The concrete law for the scene `hertz` (stiffness, mass and speed are taken from it).
+    pub fn build(&self, hertz: &HertzImpact64) -> Result<ForceLaw, SimError> {
+        let k = hertz.stiffness;
+        let m = hertz.mass_kg;
+        let u = hertz.speed_m_s;
+        let restitution = |model, e| ForceLaw::restitution_law(model, k, 1.5, e, u);
+        let law = match *self {
+            Self::Hertz => ForceLaw::Hertz {
+                stiffness: k,
+                exponent: 1.5,
+            },
+            Self::Adams { c_max_n_s_m, d_m } => ForceLaw::AdamsImpact {
+                stiffness: k,
+                exponent: 1.5,
+                c_max_n_s_m,
+                d_m,
+            },
+            Self::AdamsRestitution { restitution, d_m } => {
+                adams_for_restitution(k, 1.5, d_m, m, u, restitution)?
+            }
+            Self::HuntCrossley { restitution: e } => {
+                restitution(RestitutionModel::HuntCrossley, e)?
+            }
+            Self::LankaraniNikravesh { restitution: e } => {
+                restitution(RestitutionModel::LankaraniNikravesh, e)?
+            }
+            Self::Flores { restitution: e } => restitution(RestitutionModel::Flores, e)?,
+            Self::Gonthier { restitution: e } => restitution(RestitutionModel::Gonthier, e)?,
+            Self::Tsuji { restitution: e } => ForceLaw::tsuji(k, m, e)?,
+            Self::Thornton {
+                yield_pressure_pa,
+                damping,
+            } => {
+                positive("radius_m", hertz.radius_m)?;
+                let chi = match damping {
+                    Some((model, e)) => {
+                        ForceLaw::restitution_law(model, k, 1.5, e, u)?;
+                        model.chi(e)
+                    }
+                    None => 0.0,
+                };
+                ForceLaw::Thornton(ThorntonContact {
+                    stiffness: k,
+                    radius_m: hertz.radius_m,
+                    yield_pressure_pa,
+                    chi,
+                    impact_speed_m_s: u,
+                    unloading: None,
+                })
+            }
+        };
+        law.validate()?;
+        Ok(law)
+    }
+}

@@ -1,0 +1,9 @@
+//! Layer 6, report: tables, CSV files and plots made from the layers below — the paper's
+//! reproduction, the trade-off study, plasticity, speed, impact rows and the scene export.
+
+pub mod export;
+pub mod impact_row;
+pub mod paper;
+pub mod plasticity;
+pub mod speed;
+pub mod tradeoff;

@@ -1,0 +1,244 @@
+//! The Cramér-Rao bound of `(ln F_max, ln t_c)` for one force pulse sampled through the
+//! scene's sensor chain in the scene's stated noise: the smallest covariance any unbiased
+//! estimator of the two features can reach from the samples.
+//!
+//! # Model
+//!
+//! The samples of a pulse are `s_n(theta) = C[e^a f((t - t_0) e^(-c))](t_n) + b + w_n`, with
+//! `f` the noiseless force pulse (N) of the impact, `C` the sensor chain (a linear operator
+//! from force in N to counts, [`Sensor::analog_counts`]), `t_n = n / f_s` the sample instants,
+//! and `w_n` white Gaussian noise of variance `sigma^2 = noise_rms_counts^2 + q^2 / 12`
+//! (`q = 1` count, the ADC's quantisation step, taken as uniform and independent of the
+//! signal). The parameters `theta = (a, c, t_0, b)` are `a = ln F_max - ln F_max0` and
+//! `c = ln t_c - ln t_c0` (the features, shape fixed), the onset time `t_0` within the samples
+//! and the baseline `b` in counts (the two nuisance parameters). The Fisher matrix is
+//! `J_ij = sum_n (ds_n / d theta_i)(ds_n / d theta_j) / sigma^2`; the bound of the features is
+//! the upper left 2 x 2 block of `J^-1` (nuisances included: each one the estimator does not
+//! know widens the bound).
+//!
+//! The derivative waveforms are computed through the chain (noise added after it):
+//! `ds / da = s` exactly, and `ds / dc`, `ds / dt_0` by central differences of the chain's
+//! output with the time scale and the onset moved by `+- STEP` of the pulse's duration;
+//! `ds / db = 1`. The window is the pulse with [`MARGIN_SAMPLES`] before its onset and
+//! `max(MARGIN_SAMPLES, duration)` after its end (the quiet samples around a pulse fix the
+//! baseline; what a chain rings beyond that window is left out).
+
+use crate::sim::sensor::{FnForce, ForcePulse, Sensor};
+
+/// Quiet samples in the window before a pulse's onset (the kernel's pre-trigger ring holds 32).
+pub const MARGIN_SAMPLES: usize = 32;
+
+/// Relative step of the central differences in the time scale and the onset (of `t_c`).
+pub const STEP: f64 = 0.005;
+
+/// The noise variance per sample in counts^2: `noise_rms_counts^2 + 1 / 12` (white noise plus
+/// the quantisation of a 1-count ADC step).
+pub fn sample_variance_counts2(noise_rms_counts: f64) -> f64 {
+    noise_rms_counts * noise_rms_counts + 1.0 / 12.0
+}
+
+/// The Fisher matrix `J_ij = sum_n d_i[n] d_j[n] / variance` of the derivative waveforms
+/// `derivatives` (each `ds / d theta_i` in counts per unit of `theta_i`, all of one length)
+/// in white noise of `variance` counts^2.
+pub fn fisher(derivatives: &[Vec<f64>], variance: f64) -> Vec<Vec<f64>> {
+    derivatives
+        .iter()
+        .map(|di| {
+            derivatives
+                .iter()
+                .map(|dj| di.iter().zip(dj).map(|(a, b)| a * b).sum::<f64>() / variance)
+                .collect()
+        })
+        .collect()
+}
+
+/// The inverse of a symmetric positive definite matrix by Cholesky (`None` when it is not
+/// positive definite to working precision).
+// Triangular factorisation and solves read best with their indices.
+#[allow(clippy::needless_range_loop)]
+pub fn invert_spd(m: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+    let n = m.len();
+    // L L^T = m.
+    let mut l = vec![vec![0.0; n]; n];
+    for i in 0..n {
+        for j in 0..=i {
+            let s: f64 = m[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+            if i == j {
+                if !(s > 1e-300 && s > 1e-13 * m[i][i].abs()) {
+                    return None;
+                }
+                l[i][i] = s.sqrt();
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    // Columns of m^-1 by forward and back substitution.
+    let mut inv = vec![vec![0.0; n]; n];
+    for col in 0..n {
+        let mut y = vec![0.0; n];
+        for i in 0..n {
+            let e = if i == col { 1.0 } else { 0.0 };
+            y[i] = (e - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+        }
+        for i in (0..n).rev() {
+            let v = (y[i] - (i + 1..n).map(|k| l[k][i] * inv[k][col]).sum::<f64>()) / l[i][i];
+            inv[i][col] = v;
+        }
+    }
+    Some(inv)
+}
+
+/// Covariance of `(ln F_max, ln t_c)`: `[var ln F, var ln t_c, cov]`.
+pub type FeatureCovariance = [f64; 3];
+
+/// The Cramér-Rao bound of `(ln F_max, ln t_c)` of `pulse` (its `start_s` ignored) sampled by
+/// `sensor` with its onset `onset_fraction` of a sample after a sample instant (see the
+/// module docs); `None` when the Fisher matrix is singular (a pulse that leaves no trace in
+/// the samples).
+pub fn feature_crb(
+    sensor: &Sensor,
+    pulse: &ForcePulse,
+    onset_fraction: f64,
+) -> Option<FeatureCovariance> {
+    let fs = sensor.sample_rate_hz();
+    let d = pulse.duration_s;
+    let pulse_samples = (d * fs).ceil() as usize + 1;
+    let n = MARGIN_SAMPLES + pulse_samples + MARGIN_SAMPLES.max(pulse_samples);
+    let t0 = (MARGIN_SAMPLES as f64 + onset_fraction) / fs;
+    // The chain's output for the pulse with log time scale `c` and onset `onset_s`.
+    let output = |c: f64, onset_s: f64| -> Vec<f64> {
+        let scale = (-c).exp();
+        let force = FnForce(|t: f64| pulse.force_at((t - onset_s) * scale));
+        sensor.analog_counts(&force, n, 0.0)
+    };
+    let s0 = output(0.0, t0);
+    let (hc, ht) = (STEP, STEP * d);
+    let diff = |p: Vec<f64>, m: Vec<f64>, h: f64| -> Vec<f64> {
+        p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+    };
+    let ds_dc = diff(output(hc, t0), output(-hc, t0), hc);
+    let ds_dt0 = diff(output(0.0, t0 + ht), output(0.0, t0 - ht), ht);
+    let ones = vec![1.0; n];
+    let variance = sample_variance_counts2(sensor.spec().noise_rms_counts);
+    let inv = invert_spd(&fisher(&[s0, ds_dc, ds_dt0, ones], variance))?;
+    Some([inv[0][0], inv[1][1], inv[0][1]])
+}
+
+/// [`feature_crb`] averaged over `phases` onsets evenly spread over one sample (`k / phases`
+/// of a sample, `k = 0 .. phases`): the covariance of an impact whose onset is uniform within
+/// a sample. `None` when any phase gives `None`.
+pub fn phase_averaged_crb(
+    sensor: &Sensor,
+    pulse: &ForcePulse,
+    phases: usize,
+) -> Option<FeatureCovariance> {
+    let p = phases.max(1);
+    let mut sum = [0.0; 3];
+    for k in 0..p {
+        let c = feature_crb(sensor, pulse, k as f64 / p as f64)?;
+        for (s, v) in sum.iter_mut().zip(c) {
+            *s += v / p as f64;
+        }
+    }
+    Some(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::SensorSpec;
+    use crate::sim::sensor::PulseShape;
+
+    fn rigid(noise_rms_counts: f64) -> Sensor {
+        Sensor::new(&SensorSpec::rigid(
+            100_000.0,
+            50.0,
+            30.0,
+            noise_rms_counts,
+            16,
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn amplitude_bound_is_sigma_squared_over_the_energy_of_the_shape() {
+        // One parameter, a sampled Gaussian pulse of known shape h_n: var(A) = sigma^2 /
+        // sum h_n^2, and with an unknown baseline as well: sigma^2 / (sum h^2 - (sum h)^2 / N).
+        let n = 200;
+        let h: Vec<f64> = (0..n)
+            .map(|i| (-0.5 * ((i as f64 - 100.3) / 4.0).powi(2)).exp())
+            .collect();
+        let var = 16.0;
+        let e: f64 = h.iter().map(|v| v * v).sum();
+        let inv = invert_spd(&fisher(std::slice::from_ref(&h), var)).unwrap();
+        assert!((inv[0][0] / (var / e) - 1.0).abs() < 1e-12);
+        let s: f64 = h.iter().sum();
+        let inv = invert_spd(&fisher(&[h.clone(), vec![1.0; n]], var)).unwrap();
+        let expected = var / (e - s * s / n as f64);
+        assert!((inv[0][0] / expected - 1.0).abs() < 1e-12, "{inv:?}");
+        // Closed form of the continuum: sum h^2 = 4 sqrt(pi) for a Gaussian of sigma 4 samples.
+        assert!(
+            (e / (4.0 * std::f64::consts::PI.sqrt()) - 1.0).abs() < 1e-9,
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn feature_bound_of_a_long_half_sine_matches_its_closed_form() {
+        // A half-sine F sin(pi t / T) of N_p = T f_s samples in noise sigma: with the shape,
+        // onset and time scale known the amplitude bound is sigma^2 / (g F)^2 / sum sin^2 =
+        // 2 sigma^2 / ((g F)^2 N_p). With onset, scale and baseline unknown the bound of ln F
+        // rises. The expected ratio of the full bound to the known-shape one is the (0, 0)
+        // element of the inverse of the continuum Gram matrix of the four derivative
+        // waveforms in x = t / T (pulse on (0, 1), window of length L in units of T):
+        // ds/da = sin(pi x), ds/dc = -pi x cos(pi x), ds/d(t_0 / T) = -pi cos(pi x),
+        // ds/db = 1, times <sin^2> = 1/2.
+        let sensor = rigid(4.0);
+        let g = sensor.counts_per_newton();
+        let t = 4e-4; // 40 samples
+        let f_max = 2000.0;
+        let pulse = ForcePulse {
+            start_s: 0.0,
+            duration_s: t,
+            scale: 1.0,
+            shape: PulseShape::Series {
+                step_s: t / 4096.0,
+                force_n: (0..=4096)
+                    .map(|k| f_max * (std::f64::consts::PI * k as f64 / 4096.0).sin())
+                    .collect(),
+            },
+        };
+        let var = sample_variance_counts2(4.0);
+        let np = t * 100_000.0;
+        let known = 2.0 * var / ((g * f_max).powi(2) * np);
+        let c = phase_averaged_crb(&sensor, &pulse, 8).unwrap();
+        let m = 200_000;
+        let pi = std::f64::consts::PI;
+        let mut gram = vec![vec![0.0; 4]; 4];
+        for k in 0..m {
+            let x = (k as f64 + 0.5) / m as f64;
+            let w = [
+                (pi * x).sin(),
+                -pi * x * (pi * x).cos(),
+                -pi * (pi * x).cos(),
+                1.0,
+            ];
+            for i in 0..4 {
+                for j in 0..4 {
+                    gram[i][j] += w[i] * w[j] / m as f64;
+                }
+            }
+        }
+        // The window: 32 samples, the pulse's 41, then 41 more; ones over all of it.
+        gram[3][3] = (32.0 + 41.0 + 41.0) / np;
+        let inv = invert_spd(&gram).unwrap();
+        let expected = inv[0][0] * 0.5 * known;
+        assert!(
+            (c[0] / expected - 1.0).abs() < 0.03,
+            "var ln F {} against {expected} (known shape {known})",
+            c[0]
+        );
+        assert!(c[1] > 0.0 && c[2].abs() < (c[0] * c[1]).sqrt());
+    }
+}

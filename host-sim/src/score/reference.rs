@@ -1,0 +1,518 @@
+//! The reference limit of a scene: the best forced-choice accuracy any classifier can reach
+//! from the features `f = (ln F_max, ln t_c)` of the scene's impacts measured in the scene's
+//! stated sensor noise, computed from physics alone (no figure of the kernel enters).
+//!
+//! # Method
+//!
+//! 1. **Noiseless features.** For every class, a grid of `grid x grid` impacts spans its
+//!    prior box in `z = (x, y) = (ln R, ln u)`. Each is integrated with the scene's contact
+//!    law (a class that states a yield pressure: Thornton's law, [`SceneFile::class_law`]) by
+//!    host-sim's integrator ([`crate::physics::impact::simulate`]): `F_max` is the peak force,
+//!    `t_c` the pulse's duration (first contact to the first zero of the force after its
+//!    peak), as the stream's truth defines them. For undamped Hertz the features are the
+//!    closed forms `F_max = k delta_max^(3/2)`, `t_c = 2.9432751843 delta_max / u`. Damped
+//!    laws, and the Adams law with a fixed `c_max` (whose damping ratio changes with size and
+//!    speed), need no calibration: the integrator gives their features directly.
+//! 2. **Measurement noise.** At each grid impact the Cramér-Rao bound of `f` for the sampled
+//!    pulse through the scene's chain in the scene's noise ([`crate::score::crb`]), averaged over the
+//!    onset's phase within a sample: the covariance `S(z)` no unbiased estimator beats.
+//! 3. **Interpolation.** Between grid points the deviation `d(z) = f(z) - (c + A z)` from the
+//!    Hertz power laws (`A = [[2, 6/5], [1, -1/5]]`, zero for Hertz, a constant for the
+//!    restitution-parametrised laws), `ln sigma` of both features and their correlation are
+//!    bilinear in `z` (clamped at the box's edges).
+//! 4. **Class densities.** `p(f | c) = integral_box p_c(z) N(f; g(z), S(z)) dz` with
+//!    `g(z) = c + A z + d(z)`. It is evaluated by linearising `g` about the preimage
+//!    `z* = g^-1(f)` (Newton) and taking `S` there: `p(f | c) = integral_box p_c(z)
+//!    N(z; z*, J^-1 S J^-T) dz / |det J|`, `J` the Jacobian of `g` at `z*`; the `y` integral
+//!    by Gauss-Legendre over `y* +- 8 sigma_y` cut to the box, the `x` integral (`x` uniform)
+//!    in closed form given `y`. Without noise, `p(f | c) = p_c(z*) / |det J|`.
+//! 5. **Accuracy.** Monte Carlo over fresh draws of each class's prior: the exact features
+//!    `g(z)` plus Gaussian noise of covariance `S(z)`, decided by the largest
+//!    `prior_c p(f | c)`; class results weighted by the normalised priors, with the standard
+//!    error `sqrt(a (1 - a) / n)`. The same draws decided without noise give the noiseless
+//!    ceiling of the scene's physics.
+//!
+//! The limit is an upper bound of what a detector of the features can reach in so far as the
+//! bound is reached (the Cramér-Rao bound is the variance of an efficient estimator; at low
+//! signal-to-noise ratio real estimators do worse), the pulse shape is known to the estimator
+//! (only amplitude, time scale, onset and baseline unknown), and the ADC does not clip.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+use crate::physics::hertz64::HertzImpact64;
+use crate::physics::impact::{ImpactSpec, simulate};
+use crate::physics::integrate::SimError;
+use crate::physics::law_spec::LawSpec;
+use crate::scene::{SceneError, SceneFile};
+use crate::score::bayes::{
+    ClassModel, FeatureNoise, class_models, gauss_legendre, gauss_pair, phi,
+};
+use crate::score::crb::{FeatureCovariance, phase_averaged_crb};
+use crate::sim::sensor::{ForcePulse, PulseShape, Sensor};
+
+/// Default grid points per axis of a class's `(ln R, ln u)` box.
+pub const DEFAULT_GRID: usize = 20;
+
+/// Default Monte Carlo draws per class.
+pub const DEFAULT_DRAWS_PER_CLASS: usize = 50_000;
+
+/// Default onset phases the Cramér-Rao bound is averaged over.
+pub const DEFAULT_PHASES: usize = 4;
+
+/// Most Monte Carlo draws per class accepted.
+pub const MAX_DRAWS_PER_CLASS: usize = 10_000_000;
+
+/// Largest grid accepted (points per axis).
+pub const MAX_GRID: usize = 64;
+
+/// Standard deviation taken for a feature whose Fisher matrix is singular (a pulse that leaves
+/// no trace in the samples): far wider than any class.
+const NO_INFORMATION_SIGMA: f64 = 10.0;
+
+/// Points per recorded pulse of the integrator.
+const RECORD_POINTS: f64 = 512.0;
+
+/// ChaCha8 stream of the reference Monte Carlo.
+const RNG_REFERENCE: u64 = 12;
+
+/// Options of [`reference_limit`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReferenceOptions {
+    /// Grid points per axis of each class's box (`2..=MAX_GRID`).
+    pub grid: usize,
+    /// Monte Carlo draws per class (`1..=MAX_DRAWS_PER_CLASS`).
+    pub draws_per_class: usize,
+    /// Onset phases the bound is averaged over (`>= 1`).
+    pub phases: usize,
+}
+
+impl Default for ReferenceOptions {
+    /// [`DEFAULT_GRID`], [`DEFAULT_DRAWS_PER_CLASS`], [`DEFAULT_PHASES`].
+    fn default() -> Self {
+        Self {
+            grid: DEFAULT_GRID,
+            draws_per_class: DEFAULT_DRAWS_PER_CLASS,
+            phases: DEFAULT_PHASES,
+        }
+    }
+}
+
+/// Why the reference limit could not be computed.
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceError {
+    /// The scene's sensor chain is invalid.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// An impact of the grid could not be integrated.
+    #[error("reference limit: class {class}, impact R {radius_m} m, u {speed_m_s} m/s: {error}")]
+    Simulation {
+        /// The class's name.
+        class: String,
+        /// Radius in m.
+        radius_m: f64,
+        /// Speed in m/s.
+        speed_m_s: f64,
+        /// The integrator's error.
+        error: SimError,
+    },
+    /// An option is out of range.
+    #[error("reference option {field} {problem}")]
+    Option {
+        /// The option.
+        field: &'static str,
+        /// What is wrong with it.
+        problem: String,
+    },
+}
+
+/// The reference limit of a scene (see the module docs).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReferenceLimit {
+    /// Best forced-choice accuracy from features measured at the Cramér-Rao bound.
+    pub accuracy: f64,
+    /// Its Monte Carlo standard error.
+    pub std_error: f64,
+    /// The same draws decided on their exact features: the noiseless ceiling.
+    pub noiseless_accuracy: f64,
+    /// Its standard error.
+    pub noiseless_std_error: f64,
+    /// `accuracy` of each class (draws of that class decided right), in the scene's order.
+    pub per_class_accuracy: Vec<f64>,
+    /// Monte Carlo draws, all classes.
+    pub draws: usize,
+    /// Mean bound standard deviation of `ln F_max` over the draws (dimensionless).
+    pub mean_sigma_ln_force: f64,
+    /// Mean bound standard deviation of `ln t_c` over the draws.
+    pub mean_sigma_ln_duration: f64,
+    /// `"hertz_closed_form"` (undamped Hertz for every class) or `"integrator"` (any class
+    /// under another law, a yielding class included).
+    pub features: &'static str,
+    /// Grid points per axis.
+    pub grid: usize,
+    /// Onset phases averaged.
+    pub phases: usize,
+}
+
+/// One grid point: deviation from the Hertz power laws, log standard deviations, correlation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Node {
+    deviation: [f64; 2],
+    ln_sigma: [f64; 2],
+    correlation: f64,
+}
+
+/// The features and their bound at one point of a class's box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocalFeatures {
+    /// `(ln F_max, ln t_c)`.
+    pub features: [f64; 2],
+    /// `d features / d (ln R, ln u)`, rows the features.
+    pub jacobian: [[f64; 2]; 2],
+    /// `[var ln F, var ln t_c, cov]` of the bound.
+    pub covariance: FeatureCovariance,
+}
+
+/// One class's features and noise over its prior box, interpolated from a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClassMap {
+    /// The class's Hertz power laws and prior.
+    pub model: ClassModel,
+    grid: usize,
+    phases: usize,
+    features: &'static str,
+    nodes: Vec<Node>,
+}
+
+impl ClassMap {
+    /// The map of class `class` of `scene` (see the module docs, steps 1-3).
+    pub fn build(
+        scene: &SceneFile,
+        class: usize,
+        sensor: &Sensor,
+        opts: &ReferenceOptions,
+    ) -> Result<Self, ReferenceError> {
+        let model = class_models(scene)[class];
+        let c = &scene.classes[class];
+        let (material, plate) = (c.material.material(), scene.plate.material());
+        let law = scene
+            .class_law(class)
+            .map_err(|error| ReferenceError::Simulation {
+                class: c.name.clone(),
+                radius_m: c.radius_m.min,
+                speed_m_s: c.speed_range_m_s().min,
+                error,
+            })?;
+        let closed_form = matches!(law, LawSpec::Hertz);
+        let n = opts.grid;
+        let mut nodes = Vec::with_capacity(n * n);
+        for j in 0..n {
+            for i in 0..n {
+                let (x, y) = grid_point(&model, n, i, j);
+                let (radius_m, speed_m_s) = (x.exp(), y.exp());
+                let err = |error| ReferenceError::Simulation {
+                    class: c.name.clone(),
+                    radius_m,
+                    speed_m_s,
+                    error,
+                };
+                let hertz =
+                    HertzImpact64::new(&material, &plate, radius_m, speed_m_s).map_err(err)?;
+                let mut spec = ImpactSpec::new(material, plate, radius_m, speed_m_s);
+                spec.law = law;
+                let step_s = hertz.duration_s / RECORD_POINTS;
+                spec.record = Some(step_s);
+                let report = simulate(&spec).map_err(err)?;
+                let features = if closed_form {
+                    [hertz.peak_force_n.ln(), hertz.duration_s.ln()]
+                } else {
+                    [report.peak_force_n.ln(), report.pulse_duration_s.ln()]
+                };
+                let pulse = ForcePulse {
+                    start_s: 0.0,
+                    duration_s: report.duration_s,
+                    scale: 1.0,
+                    shape: PulseShape::Series {
+                        step_s,
+                        force_n: report
+                            .force_series
+                            .unwrap_or_default()
+                            .into_iter()
+                            .map(|(_, f)| f)
+                            .collect(),
+                    },
+                };
+                let cov = phase_averaged_crb(sensor, &pulse, opts.phases);
+                let hertz_f = model.forward(x, y);
+                nodes.push(node(
+                    [features[0] - hertz_f.0, features[1] - hertz_f.1],
+                    cov,
+                ));
+            }
+        }
+        Ok(Self {
+            model,
+            grid: n,
+            phases: opts.phases,
+            features: if closed_form {
+                "hertz_closed_form"
+            } else {
+                "integrator"
+            },
+            nodes,
+        })
+    }
+
+    /// The same map with the noise replaced by `noise` everywhere.
+    pub fn with_constant_noise(mut self, noise: &FeatureNoise) -> Self {
+        let cov = [
+            noise.sigma_ln_force.powi(2),
+            noise.sigma_ln_duration.powi(2),
+            noise.correlation * noise.sigma_ln_force * noise.sigma_ln_duration,
+        ];
+        for n in &mut self.nodes {
+            *n = node(n.deviation, Some(cov));
+        }
+        self
+    }
+
+    /// Features, Jacobian and bound at `(x, y) = (ln R, ln u)` (bilinear between grid points,
+    /// clamped to the box: outside it the deviation and the noise of its edge).
+    pub fn at(&self, x: f64, y: f64) -> LocalFeatures {
+        let (x0, x1) = self.model.ln_radius;
+        let (y0, y1) = self.model.ln_speed;
+        let last = (self.grid - 1) as f64;
+        let cell = |v: f64, lo: f64, hi: f64| -> (usize, f64, f64) {
+            let g = ((v - lo) / (hi - lo) * last).clamp(0.0, last);
+            let i = (g.floor() as usize).min(self.grid - 2);
+            let inside = v > lo && v < hi;
+            (i, g - i as f64, if inside { last / (hi - lo) } else { 0.0 })
+        };
+        let (i, fx, dgx) = cell(x, x0, x1);
+        let (j, fy, dgy) = cell(y, y0, y1);
+        let q = |a: usize, b: usize| &self.nodes[(j + b) * self.grid + i + a];
+        let (n00, n10, n01, n11) = (q(0, 0), q(1, 0), q(0, 1), q(1, 1));
+        let lerp = |v: &dyn Fn(&Node) -> f64| -> (f64, f64, f64) {
+            let (a, b, c, d) = (v(n00), v(n10), v(n01), v(n11));
+            let value = a * (1.0 - fx) * (1.0 - fy)
+                + b * fx * (1.0 - fy)
+                + c * (1.0 - fx) * fy
+                + d * fx * fy;
+            let d_dx = ((b - a) * (1.0 - fy) + (d - c) * fy) * dgx;
+            let d_dy = ((c - a) * (1.0 - fx) + (d - b) * fx) * dgy;
+            (value, d_dx, d_dy)
+        };
+        let (df, dfx, dfy) = lerp(&|n| n.deviation[0]);
+        let (dt, dtx, dty) = lerp(&|n| n.deviation[1]);
+        let sf = lerp(&|n| n.ln_sigma[0]).0.exp();
+        let st = lerp(&|n| n.ln_sigma[1]).0.exp();
+        let r = lerp(&|n| n.correlation).0;
+        let (hf, ht) = self.model.forward(x, y);
+        LocalFeatures {
+            features: [hf + df, ht + dt],
+            jacobian: [[2.0 + dfx, 1.2 + dfy], [1.0 + dtx, -0.2 + dty]],
+            covariance: [sf * sf, st * st, r * sf * st],
+        }
+    }
+
+    /// `z* = g^-1(f)` by Newton's method from the Hertz inverse (see the module docs).
+    fn preimage(&self, f: [f64; 2]) -> (f64, f64) {
+        let (mut x, mut y) = self.model.invert(f[0], f[1]);
+        for _ in 0..30 {
+            let l = self.at(x, y);
+            let r = [l.features[0] - f[0], l.features[1] - f[1]];
+            let [[a, b], [c, d]] = l.jacobian;
+            let det = a * d - b * c;
+            let (dx, dy) = ((d * r[0] - b * r[1]) / det, (a * r[1] - c * r[0]) / det);
+            x -= dx;
+            y -= dy;
+            if dx.abs() + dy.abs() < 1e-13 {
+                break;
+            }
+        }
+        (x, y)
+    }
+
+    /// `p(f | class)` with the bound's noise (`noisy`) or without (see the module docs,
+    /// step 4); per unit of `ln F_max` and `ln t_c`.
+    pub fn density(&self, f: [f64; 2], noisy: bool) -> f64 {
+        let (mx, my) = self.preimage(f);
+        let l = self.at(mx, my);
+        let [[a, b], [c, d]] = l.jacobian;
+        let det = a * d - b * c;
+        let (x0, x1) = self.model.ln_radius;
+        let (y0, y1) = self.model.ln_speed;
+        let px = 1.0 / (x1 - x0);
+        if !noisy {
+            let inside = mx >= x0 && mx <= x1;
+            return if inside {
+                px * self.model.speed_density(my) / det.abs()
+            } else {
+                0.0
+            };
+        }
+        // Sigma_z = J^-1 S J^-T, J^-1 = [[d, -b], [-c, a]] / det.
+        let [sff, stt, sft] = l.covariance;
+        let (ia, ib, ic, id) = (d / det, -b / det, -c / det, a / det);
+        let sxx = ia * ia * sff + 2.0 * ia * ib * sft + ib * ib * stt;
+        let syy = ic * ic * sff + 2.0 * ic * id * sft + id * id * stt;
+        let sxy = ia * ic * sff + (ia * id + ib * ic) * sft + ib * id * stt;
+        let sy = syy.sqrt();
+        let lo = y0.max(my - 8.0 * sy);
+        let hi = y1.min(my + 8.0 * sy);
+        if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
+            return 0.0;
+        }
+        // x given y: mean mx + sxy / syy (y - my), variance sxx - sxy^2 / syy.
+        let cond_s = (sxx - sxy * sxy / syy).max(1e-30).sqrt();
+        let integrand = |y: f64| {
+            let gy = (-(y - my).powi(2) / (2.0 * syy)).exp()
+                / (sy * (2.0 * std::f64::consts::PI).sqrt());
+            let m = mx + sxy / syy * (y - my);
+            let px_box = phi((x1 - m) / cond_s) - phi((x0 - m) / cond_s);
+            self.model.speed_density(y) * gy * px_box
+        };
+        let mid = 0.5 * (lo + hi);
+        let integral = gauss_legendre(lo, mid, integrand) + gauss_legendre(mid, hi, integrand);
+        px * integral / det.abs()
+    }
+}
+
+/// Grid point `(i, j)` of a class's box in `(ln R, ln u)`.
+fn grid_point(model: &ClassModel, n: usize, i: usize, j: usize) -> (f64, f64) {
+    let (x0, x1) = model.ln_radius;
+    let (y0, y1) = model.ln_speed;
+    let t = |k: usize| k as f64 / (n - 1) as f64;
+    (x0 + (x1 - x0) * t(i), y0 + (y1 - y0) * t(j))
+}
+
+/// A grid node from its deviation and its covariance (`None`: no information).
+fn node(deviation: [f64; 2], cov: Option<FeatureCovariance>) -> Node {
+    let wide = NO_INFORMATION_SIGMA.ln();
+    match cov {
+        Some([vf, vt, c]) if vf > 0.0 && vt > 0.0 && vf.is_finite() && vt.is_finite() => Node {
+            deviation,
+            ln_sigma: [0.5 * vf.ln(), 0.5 * vt.ln()],
+            correlation: (c / (vf * vt).sqrt()).clamp(-0.999, 0.999),
+        },
+        _ => Node {
+            deviation,
+            ln_sigma: [wide, wide],
+            correlation: 0.0,
+        },
+    }
+}
+
+/// The class maps of every class of `scene`.
+pub fn class_maps(
+    scene: &SceneFile,
+    opts: &ReferenceOptions,
+) -> Result<Vec<ClassMap>, ReferenceError> {
+    let opt = |field, problem: &str| ReferenceError::Option {
+        field,
+        problem: problem.into(),
+    };
+    if !(2..=MAX_GRID).contains(&opts.grid) {
+        return Err(opt("grid", "must be in 2..=64"));
+    }
+    if opts.phases == 0 || opts.phases > 64 {
+        return Err(opt("phases", "must be in 1..=64"));
+    }
+    let sensor = Sensor::new(&scene.sensor)?;
+    (0..scene.classes.len())
+        .map(|c| ClassMap::build(scene, c, &sensor, opts))
+        .collect()
+}
+
+/// The Bayes-optimal class of observed features `f` among `maps` (largest prior times
+/// density).
+pub fn decide(maps: &[ClassMap], f: [f64; 2], noisy: bool) -> usize {
+    maps.iter()
+        .map(|m| m.model.prior * m.density(f, noisy))
+        .enumerate()
+        .fold((0, f64::NEG_INFINITY), |best, (i, score)| {
+            if score > best.1 { (i, score) } else { best }
+        })
+        .0
+}
+
+/// The Monte Carlo of the module docs, step 5, on `maps`, `draws_per_class` draws per class
+/// from `uniform` (numbers in `(0, 1)`).
+pub fn reference_accuracy(
+    maps: &[ClassMap],
+    draws_per_class: usize,
+    uniform: &mut impl FnMut() -> f64,
+) -> ReferenceLimit {
+    let total_prior: f64 = maps.iter().map(|m| m.model.prior).sum();
+    let n = draws_per_class.max(1);
+    let (mut acc, mut acc0, mut sum_sf, mut sum_st) = (0.0, 0.0, 0.0, 0.0);
+    let mut per_class_accuracy = Vec::with_capacity(maps.len());
+    for (i, m) in maps.iter().enumerate() {
+        let (mut right, mut right0) = (0usize, 0usize);
+        for _ in 0..n {
+            let (x, y) = m.model.sample(uniform(), uniform());
+            let l = m.at(x, y);
+            let [vf, vt, c] = l.covariance;
+            let (sf, st) = (vf.sqrt(), vt.sqrt());
+            let r = c / (sf * st);
+            let (g1, g2) = gauss_pair(uniform);
+            let f = l.features;
+            let noisy = [
+                f[0] + sf * g1,
+                f[1] + st * (r * g1 + (1.0 - r * r).max(0.0).sqrt() * g2),
+            ];
+            right += (decide(maps, noisy, true) == i) as usize;
+            right0 += (decide(maps, f, false) == i) as usize;
+            sum_sf += sf;
+            sum_st += st;
+        }
+        let w = m.model.prior / total_prior;
+        let a = right as f64 / n as f64;
+        per_class_accuracy.push(a);
+        acc += w * a;
+        acc0 += w * right0 as f64 / n as f64;
+    }
+    let draws = n * maps.len();
+    let se = |a: f64| (a * (1.0 - a) / draws as f64).sqrt();
+    ReferenceLimit {
+        accuracy: acc,
+        std_error: se(acc),
+        noiseless_accuracy: acc0,
+        noiseless_std_error: se(acc0),
+        per_class_accuracy,
+        draws,
+        mean_sigma_ln_force: sum_sf / draws as f64,
+        mean_sigma_ln_duration: sum_st / draws as f64,
+        features: if maps.iter().all(|m| m.features == "hertz_closed_form") {
+            "hertz_closed_form"
+        } else {
+            "integrator"
+        },
+        grid: maps.first().map_or(0, |m| m.grid),
+        phases: maps.first().map_or(0, |m| m.phases),
+    }
+}
+
+/// The reference limit of `scene` (see the module docs), Monte Carlo seeded with `seed`.
+pub fn reference_limit(
+    scene: &SceneFile,
+    opts: &ReferenceOptions,
+    seed: u64,
+) -> Result<ReferenceLimit, ReferenceError> {
+    if !(1..=MAX_DRAWS_PER_CLASS).contains(&opts.draws_per_class) {
+        return Err(ReferenceError::Option {
+            field: "draws_per_class",
+            problem: format!("must be in 1..={MAX_DRAWS_PER_CLASS}"),
+        });
+    }
+    let maps = class_maps(scene, opts)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(RNG_REFERENCE);
+    let mut uniform = || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    Ok(reference_accuracy(
+        &maps,
+        opts.draws_per_class,
+        &mut uniform,
+    ))
+}
