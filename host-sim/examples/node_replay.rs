@@ -17,7 +17,9 @@ use coalshock::math::DefaultBackend;
 use coalshock::scene::DEFAULT_CLASSES;
 use coalshock::{Event, Monitor, ParticleClass, Scene, Verdict};
 use coalshock_replay::{CounterLine, PulseLine, Stream};
-use host_sim::stream::{ImpactFault, match_truth, read_stream, replay_events};
+use host_sim::replay::{match_truth, replay_events};
+use host_sim::stream::ImpactFault;
+use host_sim::stream_file::read_stream;
 
 fn fail(what: String) -> ! {
     eprintln!("error {what}");
@@ -79,7 +81,7 @@ fn same_as_file(node: &Scene<DEFAULT_CLASSES, DefaultBackend>, file: &std::path:
 }
 
 /// The host replay of one stream: host-sim reads the `.bin` + `.truth.csv` pair at `stem` and
-/// replays it through the same kernel (`host_sim::stream::replay_events`: blocks through
+/// replays it through the same kernel (`host_sim::replay::replay_events`: blocks through
 /// `Monitor::feed_slice`, `Monitor::gap` at every recorded gap, `Monitor::finish`), and the
 /// node's lines are printed after `prefix`. `node_stream` is the node's compiled-in copy.
 /// The same stream fed one `Monitor::feed` per sample must give the same events; when it does

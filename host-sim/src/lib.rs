@@ -31,7 +31,7 @@ pub use physics::{
 };
 pub use report::{export, impact_row, paper, plasticity, speed, tradeoff};
 pub use score::{
-    bayes, caving, counts, crb, cusum, evaluate, mismatch, reference, reliability, saturation,
-    yield_bayes,
+    bayes, caving, counts, crb, cusum, evaluate, mismatch, reference, reliability, replay,
+    saturation, yield_bayes,
 };
-pub use sim::{identify, par, sensor, stream};
+pub use sim::{generate, identify, par, sensor, stream, stream_file};

@@ -21,11 +21,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use host_sim::generate::generate_with_progress;
 use host_sim::scene::{self, SceneFile};
-use host_sim::stream::{
-    FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamOptions,
-    generate_with_progress, write_stream,
-};
+use host_sim::stream::{FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamOptions};
+use host_sim::stream_file::write_stream;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Scene used when `--scene` is not given (relative to the working directory).

@@ -11,5 +11,6 @@ pub mod evaluate;
 pub mod mismatch;
 pub mod reference;
 pub mod reliability;
+pub mod replay;
 pub mod saturation;
 pub mod yield_bayes;

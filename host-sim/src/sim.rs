@@ -1,7 +1,10 @@
 //! Layer 3, sim: what the node's accelerometer would record — the sensor chain, labelled
-//! sample streams and their files. Imports physics and scene.
+//! sample streams, their generation, faults and files. Imports physics and scene.
 
+pub mod faults;
+pub mod generate;
 pub mod identify;
 pub mod par;
 pub mod sensor;
 pub mod stream;
+pub mod stream_file;

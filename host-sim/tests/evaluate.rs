@@ -18,9 +18,10 @@
 use coalshock::math::{DefaultBackend, Libm};
 use host_sim::convert::scene_to_kernel;
 use host_sim::evaluate::{EvalError, EvalOptions, Evaluation, evaluate};
+use host_sim::generate::generate_class;
 use host_sim::reference::ReferenceOptions;
 use host_sim::scene::{self, SceneFile};
-use host_sim::stream::{StreamOptions, generate_class};
+use host_sim::stream::StreamOptions;
 
 fn options(n_per_class: usize, seed: u64) -> EvalOptions {
     EvalOptions {

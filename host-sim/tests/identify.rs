@@ -11,9 +11,10 @@
 
 mod common;
 
+use host_sim::generate::generate;
 use host_sim::identify::{IdentifyOptions, identify};
 use host_sim::scene::{BeamMode, Resonance, SceneFile, load};
-use host_sim::stream::{StreamOptions, generate};
+use host_sim::stream::StreamOptions;
 
 fn tail_beam() -> Vec<BeamMode> {
     [

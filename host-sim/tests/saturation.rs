@@ -9,10 +9,12 @@
 use coalshock::classifier::RejectReason;
 use coalshock::{Monitor, Verdict};
 use host_sim::convert::scene_to_kernel;
+use host_sim::generate::generate;
 use host_sim::hertz64::HertzImpact64;
+use host_sim::replay::{match_truth, replay};
 use host_sim::saturation::predict;
 use host_sim::scene::SceneFile;
-use host_sim::stream::{Stream, StreamOptions, generate, match_truth, replay};
+use host_sim::stream::{Stream, StreamOptions};
 
 /// Roof sandstone against a hard coal up to R = 0.08 m, dropped 0.3-1.2 m, at the paper's
 /// gain (30 counts per m/s^2 on 50 kg, 16 bits: full scale 54.6 kN).

@@ -18,11 +18,13 @@
 use coalshock::classifier::RejectReason;
 use coalshock::{Monitor, Verdict};
 use host_sim::convert::{measurement_from_kernel, scene_to_kernel};
+use host_sim::generate::generate;
+use host_sim::replay::{match_truth, replay, replay_events};
 use host_sim::scene::{Resonance, SceneFile};
 use host_sim::stream::{
-    FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamError, StreamOptions, generate,
-    match_truth, read_stream, replay, replay_events, stream_paths, write_stream,
+    FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamError, StreamOptions,
 };
+use host_sim::stream_file::{read_stream, stream_paths, write_stream};
 
 /// Samples between a report's largest sample and the truth's nearest sample to the peak.
 const PEAK_TOLERANCE_SAMPLES: u64 = 2;

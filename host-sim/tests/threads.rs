@@ -8,8 +8,9 @@ use coalshock::math::DefaultBackend;
 use common::shipped_scene;
 use host_sim::caving::{CavingOptions, run as run_caving};
 use host_sim::evaluate::{EvalOptions, evaluate};
+use host_sim::generate::generate;
 use host_sim::scene::SceneFile;
-use host_sim::stream::{PulseModel, StreamOptions, generate};
+use host_sim::stream::{PulseModel, StreamOptions};
 
 /// Runs `f` on a pool of `threads` threads.
 fn on_pool<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {

@@ -7,11 +7,11 @@
 mod common;
 
 use common::shipped_scene;
+use host_sim::generate::hertz_sine_pulse;
 use host_sim::hertz64::Material64;
 use host_sim::impact::{ImpactSpec, simulate};
 use host_sim::law_spec::LawSpec;
 use host_sim::sensor::{ForcePulse, ForceSignal, ForceTrack, PulseShape, Sensor};
-use host_sim::stream::hertz_sine_pulse;
 
 /// A signal that only searches: the walking calls fall back to `force_n` and `is_zero_on`.
 struct Searching<'a>(&'a ForceTrack);

@@ -715,7 +715,7 @@ fn replay_logged<M: Backend>(
 const REPLAY_BLOCK: usize = 256;
 
 /// The chain scene's stream through a monitor on the chain scene (default backend), as
-/// host-sim replays it (`host_sim::stream::replay_events`): the stored samples between two
+/// host-sim replays it (`host_sim::replay::replay_events`): the stored samples between two
 /// recorded gaps through `Monitor::feed_slice` (in blocks of [`REPLAY_BLOCK`]),
 /// `Monitor::gap` at each gap, then `Monitor::finish`. Every line is logged after the prefix
 /// `chain `.

@@ -48,7 +48,9 @@ use crate::report::paper::{Curve, Stroke, draw_svg};
 use crate::scene::{self, SceneFile};
 use crate::score::bayes::{ClassModel, bayes_accuracy};
 use crate::score::evaluate::{EvalOptions, class_models, evaluate};
-use crate::sim::stream::{PulseModel, Stream, StreamOptions, generate, replay_events};
+use crate::score::replay::replay_events;
+use crate::sim::generate::generate;
+use crate::sim::stream::{PulseModel, Stream, StreamOptions};
 
 /// Samples per `Monitor::feed_slice` call when timing the block entry (the firmware's FIFO
 /// block, `fw/budgets.txt`).

@@ -10,7 +10,7 @@
 //! the share of its place in the round (the group's class drawn by prior), its radius and
 //! speed drawn from its class, and it arrives a Poisson time after the previous one
 //! (`rate_hz` impacts per s; impacts that start while the previous one is on are pile-ups,
-//! which the kernel rejects). The stream ([`crate::sim::stream::generate_planned`]) is replayed
+//! which the kernel rejects). The stream ([`crate::sim::generate::generate_planned`]) is replayed
 //! through `Monitor::with_flow`; each pulse is placed at the impact whose peak it reports.
 //! Every round has its own seeds; the rounds are simulated on every core and taken in order
 //! ([`crate::sim::par`]), so the report does not depend on the number of threads.
@@ -60,10 +60,10 @@ use crate::scene::{SceneError, SceneFile, SpeedSpec};
 use crate::score::bayes::ClassModel;
 use crate::score::cusum::{Cusum, MixtureModel, NaiveRule, increment, label_increment, median_p90};
 use crate::score::evaluate::class_models;
+use crate::score::replay::replay_events;
+use crate::sim::generate::{PlannedImpact, generate_planned};
 use crate::sim::par::map_ordered;
-use crate::sim::stream::{
-    PlannedImpact, StreamError, StreamOptions, generate_planned, replay_events,
-};
+use crate::sim::stream::{StreamError, StreamOptions};
 
 /// False-alarm settings of the delay-against-false-alarm curve (alarms per impact).
 pub const CURVE_RATES: [f64; 6] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];

@@ -8,14 +8,14 @@
 //!
 //! Exactly `n_per_class` impacts of every class: `R` log-uniform, `u` uniform (or the drop
 //! height uniform, `u = sqrt(2 g h)`), as the scene says. They are cut into streams of
-//! `impacts_per_stream` impacts of one class each ([`crate::sim::stream::generate_class`]: the
+//! `impacts_per_stream` impacts of one class each ([`crate::sim::generate::generate_class`]: the
 //! scene's contact law through the integrator, the sensor chain, well-separated impacts with
 //! 2-10 ms of quiet between pulses, no injected faults), and stream `j` of class `c` has its
 //! own seed derived from `(seed, c, j)`. The streams are simulated and replayed on every core
 //! and folded in their fixed order ([`crate::sim::par`]): one seed gives one result on every
 //! machine, whatever the number of threads. Each stream is replayed through a fresh `Monitor`
-//! ([`crate::sim::stream::replay_events`]) and its reports are paired with the impacts
-//! ([`crate::sim::stream::match_truth`], nearest peak first, at most one longest contact time
+//! ([`crate::score::replay::replay_events`]) and its reports are paired with the impacts
+//! ([`crate::score::replay::match_truth`], nearest peak first, at most one longest contact time
 //! apart).
 //!
 //! # Scores
@@ -101,8 +101,10 @@ use crate::score::bayes::{ClassModel, FeatureNoise, bayes_accuracy, decide};
 use crate::score::mismatch::ChainMismatch;
 use crate::score::reference::{ReferenceError, ReferenceLimit, ReferenceOptions, reference_limit};
 use crate::score::reliability::{Reliability, reliability};
+use crate::score::replay::{match_truth, replay_events};
+use crate::sim::generate::generate_class;
 use crate::sim::par::map_ordered;
-use crate::sim::stream::{StreamError, StreamOptions, generate_class, match_truth, replay_events};
+use crate::sim::stream::{StreamError, StreamOptions};
 
 /// Default impacts per simulated stream.
 pub const DEFAULT_IMPACTS_PER_STREAM: usize = 250;
