@@ -84,7 +84,8 @@ pub enum PulseModel {
     #[default]
     Integrator,
     /// The closed-form undamped shape `F_max sin^(3/2)(pi t / t_c)`
-    /// ([`crate::sim::generate::hertz_sine_pulse`]), ignoring the scene's contact law: fast, within 2.4 % of `F_max` of the exact pulse.
+    /// ([`crate::sim::generate::hertz_sine_pulse`]), ignoring the scene's contact law: fast,
+    /// within 2.4 % of `F_max` of the exact pulse.
     HertzSine,
 }
 
