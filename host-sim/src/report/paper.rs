@@ -494,24 +494,37 @@ fn min_max(v: &[f64]) -> (f64, f64) {
         })
 }
 
+/// The paper's claims (Figs 2-11 and Table 3), each with whether our numbers bear it out.
 fn check_claims(
     table3: &[StiffnessRow],
     vs_speed: &[SweepPoint],
     vs_radius: &[SweepPoint],
     cfg: &PaperConfig,
 ) -> Vec<Claim> {
-    let mut claims = Vec::new();
-    let mats = ["sandstone", "coal"];
-    let speed = |m: &str| of(vs_speed, m);
-    let radius = |m: &str| of(vs_radius, m);
+    vec![
+        table3_claim(table3),
+        force_vs_speed_claim(vs_speed),
+        force_ratio_claim(vs_speed),
+        damping_gap_claim(vs_speed),
+        compression_vs_speed_claim(vs_speed),
+        force_vs_radius_claim(vs_radius),
+        compression_vs_radius_claim(vs_radius),
+        fig2_claim(vs_speed, cfg),
+        closed_form_check_claim(vs_speed, vs_radius),
+    ]
+}
 
-    // 0. Table 3 to 5 digits.
+/// The two materials of the paper's sweeps.
+const MATS: [&str; 2] = ["sandstone", "coal"];
+
+/// Claim 0: Table 3 to 5 digits.
+fn table3_claim(table3: &[StiffnessRow]) -> Claim {
     let worst = table3
         .iter()
         .map(|r| r.rel_diff().abs())
         .fold(0.0, f64::max);
     let all5 = table3.iter().all(|r| r.ours_printed() == r.paper_printed());
-    claims.push(Claim {
+    Claim {
         claim: "Table 3: k = 4/3 E* sqrt(R) for both materials and six radii".to_string(),
         holds: all5,
         evidence: format!(
@@ -523,12 +536,15 @@ fn check_claims(
             table3.len(),
             worst
         ),
-    });
+    }
+}
 
-    // 1. Force ~ linear in speed (Figs 4, 6).
+/// Claim 1: Force ~ linear in speed (Figs 4, 6).
+fn force_vs_speed_claim(vs_speed: &[SweepPoint]) -> Claim {
+    let speed = |m: &str| of(vs_speed, m);
     let mut ev = String::new();
     let mut ok = true;
-    for m in mats {
+    for m in MATS {
         let p = speed(m);
         let u = col(&p, |p| p.speed_m_s);
         for (kind, f) in [
@@ -544,14 +560,17 @@ fn check_claims(
             );
         }
     }
-    claims.push(Claim {
+    Claim {
         claim: "F_max rises with speed, basically linearly (Figs 4, 6); theory F_max ~ u^(6/5)"
             .to_string(),
         holds: ok,
         evidence: ev.trim_end_matches("; ").to_string(),
-    });
+    }
+}
 
-    // 2. Sandstone / coal force ratio ~ 2 at equal radius.
+/// Claim 2: Sandstone / coal force ratio ~ 2 at equal radius.
+fn force_ratio_claim(vs_speed: &[SweepPoint]) -> Claim {
+    let speed = |m: &str| of(vs_speed, m);
     let (s, c) = (speed("sandstone"), speed("coal"));
     let theory_ratio: Vec<f64> = s
         .iter()
@@ -568,7 +587,7 @@ fn check_claims(
     let k_ratio = s[0].stiffness / c[0].stiffness;
     let (_, slope_s, _) = linear_fit(&col(&s, |p| p.speed_m_s), &col(&s, |p| p.theory_force_n));
     let (_, slope_c, _) = linear_fit(&col(&c, |p| p.speed_m_s), &col(&c, |p| p.theory_force_n));
-    claims.push(Claim {
+    Claim {
         claim: "Sandstone's F_max is about twice coal's at equal radius, and so is its slope \
                 against speed (Figs 4, 6)"
             .to_string(),
@@ -584,12 +603,15 @@ fn check_claims(
             },
             slope_s / slope_c
         ),
-    });
+    }
+}
 
-    // 3. Damped below theory; the gap grows with speed (Figs 3, 4 vs 6).
+/// Claim 3: Damped below theory; the gap grows with speed (Figs 3, 4 vs 6).
+fn damping_gap_claim(vs_speed: &[SweepPoint]) -> Claim {
+    let speed = |m: &str| of(vs_speed, m);
     let mut ev = String::new();
     let mut ok = true;
-    for m in mats {
+    for m in MATS {
         let p = speed(m);
         let gap = col(&p, |p| p.theory_force_n - p.damped_force_n);
         let rel = col(&p, |p| 1.0 - p.damped_force_n / p.theory_force_n);
@@ -611,15 +633,19 @@ fn check_claims(
             }
         );
     }
-    claims.push(Claim {
+    Claim {
         claim: "Simulated (damped) F_max is below theory at every speed and the difference grows \
                 with speed (Figs 3, 6)"
             .to_string(),
         holds: ok,
         evidence: ev.trim_end_matches("; ").to_string(),
-    });
+    }
+}
 
-    // 4. Compression grows with speed; coal compresses more (Figs 5, 7).
+/// Claim 4: Compression grows with speed; coal compresses more (Figs 5, 7).
+fn compression_vs_speed_claim(vs_speed: &[SweepPoint]) -> Claim {
+    let speed = |m: &str| of(vs_speed, m);
+    let (s, c) = (of(vs_speed, "sandstone"), of(vs_speed, "coal"));
     let ratio: Vec<f64> = c
         .iter()
         .zip(&s)
@@ -633,12 +659,12 @@ fn check_claims(
         .collect();
     let (drlo, drhi) = min_max(&dratio);
     let expo = loglog_exponent(&col(&c, |p| p.speed_m_s), &col(&c, |p| p.theory_delta_m));
-    claims.push(Claim {
+    Claim {
         claim: "delta_max rises with speed and coal compresses more than sandstone (Figs 5, 7)"
             .to_string(),
         holds: rlo > 1.0
             && drlo > 1.0
-            && mats.iter().all(|m| {
+            && MATS.iter().all(|m| {
                 let p = speed(m);
                 strictly_increasing(&col(&p, |p| p.theory_delta_m))
                     && strictly_increasing(&col(&p, |p| p.damped_delta_m))
@@ -647,12 +673,15 @@ fn check_claims(
             "theory delta_max ~ u^{expo:.4} (4/5); coal/sandstone delta_max {rlo:.4}..{rhi:.4} \
              (theory), {drlo:.4}..{drhi:.4} (damped)"
         ),
-    });
+    }
+}
 
-    // 5. Force grows with radius, faster and faster (Figs 8, 10).
+/// Claim 5: Force grows with radius, faster and faster (Figs 8, 10).
+fn force_vs_radius_claim(vs_radius: &[SweepPoint]) -> Claim {
+    let radius = |m: &str| of(vs_radius, m);
     let mut ev = String::new();
     let mut ok = true;
-    for m in mats {
+    for m in MATS {
         let p = radius(m);
         let r = col(&p, |p| p.radius_m);
         for (kind, f) in [
@@ -664,18 +693,21 @@ fn check_claims(
             let _ = write!(ev, "{m} {kind}: F_max ~ R^{expo:.4}; ");
         }
     }
-    claims.push(Claim {
+    Claim {
         claim: "F_max rises with radius, faster and faster (Figs 8, 10); theory F_max ~ R^2"
             .to_string(),
         holds: ok,
         evidence: ev.trim_end_matches("; ").to_string(),
-    });
+    }
+}
 
-    // 6. Compression grows with radius, basically linearly, faster for coal (Figs 9, 11).
+/// Claim 6: Compression grows with radius, basically linearly, faster for coal (Figs 9, 11).
+fn compression_vs_radius_claim(vs_radius: &[SweepPoint]) -> Claim {
+    let radius = |m: &str| of(vs_radius, m);
     let mut ev = String::new();
     let mut slopes = Vec::new();
     let mut ok = true;
-    for m in mats {
+    for m in MATS {
         let p = radius(m);
         let r = col(&p, |p| p.radius_m);
         for (kind, d) in [
@@ -701,19 +733,22 @@ fn check_claims(
         slopes.get(2).copied().unwrap_or(f64::NAN) / slopes.first().copied().unwrap_or(f64::NAN),
         slopes.get(3).copied().unwrap_or(f64::NAN) / slopes.get(1).copied().unwrap_or(f64::NAN)
     );
-    claims.push(Claim {
+    Claim {
         claim: "delta_max rises with radius, basically linearly, and faster for coal than for \
                 sandstone (Figs 9, 11)"
             .to_string(),
         holds: ok && faster,
         evidence: ev,
-    });
+    }
+}
 
-    // 7. Fig. 2: simulated compression very close to theory (coal, R = 0.03 m).
+/// Claim 7: Fig. 2: simulated compression very close to theory (coal, R = 0.03 m).
+fn fig2_claim(vs_speed: &[SweepPoint], cfg: &PaperConfig) -> Claim {
+    let c = of(vs_speed, "coal");
     let ratio = col(&c, |p| p.damped_delta_m / p.theory_delta_m);
     let (lo, hi) = min_max(&ratio);
     let (elo, ehi) = min_max(&col(&c, |p| p.damped_restitution));
-    claims.push(Claim {
+    Claim {
         claim: "Simulated delta_max is very close to theory (Fig. 2, coal, R = 0.03 m)".to_string(),
         holds: lo > 0.9,
         evidence: format!(
@@ -721,9 +756,11 @@ fn check_claims(
              over 1-5 m/s); the paper's closeness needs lighter damping than this, see PAPER.md",
             cfg.restitution
         ),
-    });
+    }
+}
 
-    // 8. Check: undamped integration against the closed forms.
+/// Claim 8: Check: undamped integration against the closed forms.
+fn closed_form_check_claim(vs_speed: &[SweepPoint], vs_radius: &[SweepPoint]) -> Claim {
     let all: Vec<&SweepPoint> = vs_speed.iter().chain(vs_radius).collect();
     let err_f = all
         .iter()
@@ -737,7 +774,7 @@ fn check_claims(
         .iter()
         .map(|p| ((p.undamped_duration_s - p.theory_duration_s) / p.theory_duration_s).abs())
         .fold(0.0, f64::max);
-    claims.push(Claim {
+    Claim {
         claim: "Check: undamped integration reproduces the closed forms".to_string(),
         holds: err_f < 1e-6 && err_d < 1e-6 && err_t < 1e-6,
         evidence: format!(
@@ -745,8 +782,7 @@ fn check_claims(
              t_c {err_t:.1e}",
             all.len()
         ),
-    });
-    claims
+    }
 }
 
 /// The text `host-sim paper` prints: Tables 3 and 2 and the claims.

@@ -86,7 +86,7 @@ use std::time::Instant;
 
 use coalshock::math::Backend;
 use coalshock::scene::{DEFAULT_CLASSES, MAX_CLASSES};
-use coalshock::{Event, Monitor, Verdict};
+use coalshock::{Event, Monitor, Scene, Verdict};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -97,7 +97,7 @@ use crate::bridge::convert::{
 use crate::physics::hertz64::HertzImpact64;
 use crate::scene::{SceneError, SceneFile};
 pub use crate::score::bayes::class_models;
-use crate::score::bayes::{ClassModel, FeatureNoise, bayes_accuracy, decide};
+use crate::score::bayes::{Accuracy, ClassModel, FeatureNoise, bayes_accuracy, decide};
 use crate::score::mismatch::ChainMismatch;
 use crate::score::reference::{ReferenceError, ReferenceLimit, ReferenceOptions, reference_limit};
 use crate::score::reliability::{Reliability, reliability};
@@ -595,11 +595,8 @@ fn stream_seed(seed: u64, class: usize, chunk: usize) -> u64 {
     mix(seed ^ mix(((class as u64) << 40) ^ chunk as u64))
 }
 
-fn run<const N: usize, M: Backend + Send + Sync>(
-    scene: &SceneFile,
-    opts: &EvalOptions,
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Evaluation, EvalError> {
+/// Phase 1: the options' counts and the chain mismatch's relative errors are in range.
+fn validate_options(opts: &EvalOptions) -> Result<(), EvalError> {
     if opts.n_per_class == 0 {
         return Err(option_err("n_per_class", "must be >= 1"));
     }
@@ -620,41 +617,55 @@ fn run<const N: usize, M: Backend + Send + Sync>(
             return Err(option_err(name, "must be a relative error in (-1, 1)"));
         }
     }
-    let kernel_scene = scene_to_kernel_in::<N, M>(&m.applied_to(scene))?;
-    let k = scene.classes.len();
-    let models = class_models(scene);
+    Ok(())
+}
+
+/// Phase 2, the pairing tolerance in samples: as given, or the longest contact time of the
+/// scene (largest radius at the lowest speed of each class, `t_c f_s` rounded up, at least 2).
+fn match_tolerance(scene: &SceneFile, opts: &EvalOptions) -> Result<u64, EvalError> {
+    if let Some(t) = opts.match_tolerance_samples {
+        return Ok(t);
+    }
     let plate = scene.plate.material();
-    let fs = scene.sensor.sample_rate_hz;
+    let mut longest = 0.0f64;
+    for c in &scene.classes {
+        let h = HertzImpact64::new(
+            &c.material.material(),
+            &plate,
+            c.radius_m.max,
+            c.speed_range_m_s().min,
+        )
+        .map_err(|e| option_err("scene", e.to_string()))?;
+        longest = longest.max(h.duration_s);
+    }
+    Ok(((longest * scene.sensor.sample_rate_hz).ceil() as u64).max(2))
+}
 
-    // Pairing tolerance: the longest contact time of the scene, in samples.
-    let tolerance = match opts.match_tolerance_samples {
-        Some(t) => t,
-        None => {
-            let mut longest = 0.0f64;
-            for c in &scene.classes {
-                let h = HertzImpact64::new(
-                    &c.material.material(),
-                    &plate,
-                    c.radius_m.max,
-                    c.speed_range_m_s().min,
-                )
-                .map_err(|e| option_err("scene", e.to_string()))?;
-                longest = longest.max(h.duration_s);
-            }
-            ((longest * fs).ceil() as u64).max(2)
-        }
-    };
+/// Phase 3's result: every stream's outcomes and counts, folded in stream order.
+#[derive(Default)]
+struct Replayed {
+    outcomes: Vec<Outcome>,
+    rejected_by_reason: BTreeMap<&'static str, u64>,
+    samples_fed: u64,
+    pulses_detected: u64,
+    spurious: u64,
+    kernel_seconds: f64,
+}
 
-    let (col_amb, col_out, col_rej, col_miss) = (k, k + 1, k + 2, k + 3);
-    let total = opts.n_per_class * k;
-    let mut outcomes: Vec<Outcome> = Vec::with_capacity(total);
-    let mut rejected_by_reason: BTreeMap<&'static str, u64> = BTreeMap::new();
-    let (mut samples_fed, mut pulses_detected, mut spurious) = (0u64, 0u64, 0u64);
-    let mut kernel_seconds = 0.0f64;
-    let mut done = 0usize;
-    // Every stream has its own seed: simulated and replayed on every core, folded in order.
+/// Phase 3: `n_per_class` impacts of each class in streams of at most `impacts_per_stream`,
+/// each with its own seed, simulated and replayed on every core and folded in order
+/// (`progress(done, total)` after each stream).
+fn replay_streams<const N: usize, M: Backend + Send + Sync>(
+    scene: &SceneFile,
+    opts: &EvalOptions,
+    kernel_scene: &Scene<N, M>,
+    models: &[ClassModel],
+    tolerance: u64,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Replayed, EvalError> {
+    let total = opts.n_per_class * scene.classes.len();
     let mut jobs: Vec<StreamJob> = Vec::new();
-    for class in 0..k {
+    for class in 0..scene.classes.len() {
         let (mut left, mut chunk) = (opts.n_per_class, 0);
         while left > 0 {
             let n = left.min(opts.impacts_per_stream);
@@ -664,125 +675,136 @@ fn run<const N: usize, M: Backend + Send + Sync>(
         }
     }
     let run_job = |_: usize, job: &StreamJob| -> Result<ChunkResult, EvalError> {
-        run_stream::<N, M>(scene, opts, &kernel_scene, &models, tolerance, job)
+        run_stream::<N, M>(scene, opts, kernel_scene, models, tolerance, job)
     };
+    let mut all = Replayed {
+        outcomes: Vec::with_capacity(total),
+        ..Replayed::default()
+    };
+    let mut done = 0usize;
     map_ordered(&jobs, run_job, |_, r| {
         let r = r?;
-        outcomes.extend(r.outcomes);
+        all.outcomes.extend(r.outcomes);
         for reason in r.rejected {
-            *rejected_by_reason.entry(reason).or_default() += 1;
+            *all.rejected_by_reason.entry(reason).or_default() += 1;
         }
-        samples_fed += r.samples_fed;
-        pulses_detected += r.pulses_detected;
-        spurious += r.spurious;
-        kernel_seconds += r.kernel_seconds;
+        all.samples_fed += r.samples_fed;
+        all.pulses_detected += r.pulses_detected;
+        all.spurious += r.spurious;
+        all.kernel_seconds += r.kernel_seconds;
         done += r.impacts;
         progress(done, total);
         Ok::<(), EvalError>(())
     })?;
+    Ok(all)
+}
 
-    let noise = estimate_noise(&outcomes, col_rej);
+/// Phase 5's result: per class counts, the confusion matrices and the per-impact indicators
+/// (kernel forced, Bayes on measured, Bayes on debiased measured, oracle) of each class.
+struct Tally {
+    per_class: Vec<ClassCounts>,
+    confusion: Vec<Vec<u64>>,
+    forced_confusion: Vec<Vec<u64>>,
+    indicators: Vec<Vec<[f64; 4]>>,
+}
+
+/// Phase 5: every outcome counted into its class, its confusion cells and its indicators;
+/// the Bayes decisions on the kernel's measurement use `noise`'s feature noise and bias.
+fn tally(
+    scene: &SceneFile,
+    outcomes: &[Outcome],
+    models: &[ClassModel],
+    noise: &NoiseEstimate,
+    n_per_class: usize,
+) -> Tally {
+    let k = scene.classes.len();
+    let (col_rej, col_miss) = (k + 2, k + 3);
     let feature_noise = noise.feature_noise();
-
-    // Bayes limit: independent Monte Carlo draws.
-    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
-    rng.set_stream(RNG_BAYES);
-    let mut uniform = || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-    let bayes = bayes_accuracy(
-        &models,
-        feature_noise.as_ref(),
-        opts.bayes_draws_per_class,
-        &mut uniform,
-    );
-    let reference = reference_limit(scene, &opts.reference, opts.seed)?;
-
-    // Per class counts and paired indicators.
-    let priors = scene.class_probabilities();
-    let mut per_class: Vec<ClassCounts> = scene
-        .classes
-        .iter()
-        .zip(&priors)
-        .map(|(c, &p)| ClassCounts {
-            name: c.name.clone(),
-            prior: p,
-            ..ClassCounts::default()
-        })
-        .collect();
-    let mut confusion = vec![vec![0u64; k + 4]; k];
-    let mut forced_confusion = vec![vec![0u64; k + 1]; k];
-    // Per-impact indicators: kernel forced, Bayes on measured, debiased, oracle.
-    let mut indicators: Vec<Vec<[f64; 4]>> = vec![Vec::with_capacity(opts.n_per_class); k];
-    for o in &outcomes {
-        let c = &mut per_class[o.class];
+    let bias = &noise.measured_vs_hertz;
+    let mut t = Tally {
+        per_class: scene
+            .classes
+            .iter()
+            .zip(scene.class_probabilities())
+            .map(|(c, p)| ClassCounts {
+                name: c.name.clone(),
+                prior: p,
+                ..ClassCounts::default()
+            })
+            .collect(),
+        confusion: vec![vec![0u64; k + 4]; k],
+        forced_confusion: vec![vec![0u64; k + 1]; k],
+        indicators: vec![Vec::with_capacity(n_per_class); k],
+    };
+    for o in outcomes {
+        let c = &mut t.per_class[o.class];
         c.impacts += 1;
-        confusion[o.class][o.column] += 1;
-        forced_confusion[o.class][o.forced.unwrap_or(k).min(k)] += 1;
-        if o.column != col_miss {
-            c.detected += 1;
-        }
-        if o.column < k {
-            c.decided += 1;
-            if o.column == o.class {
-                c.decided_right += 1;
-            }
-        }
+        t.confusion[o.class][o.column] += 1;
+        t.forced_confusion[o.class][o.forced.unwrap_or(k).min(k)] += 1;
+        c.detected += (o.column != col_miss) as u64;
+        c.decided += (o.column < k) as u64;
+        c.decided_right += (o.column < k && o.column == o.class) as u64;
         let forced = o.forced == Some(o.class);
         let oracle = o.oracle == o.class;
         let (mut bm, mut bd) = (false, false);
         if let (Some(m), false) = (o.measured, o.column == col_rej || o.column == col_miss) {
-            bm = decide(&models, m.ln_force, m.ln_duration, feature_noise.as_ref()) == o.class;
-            bd = decide(
-                &models,
-                m.ln_force - noise.measured_vs_hertz.bias_ln_force,
-                m.ln_duration - noise.measured_vs_hertz.bias_ln_duration,
-                feature_noise.as_ref(),
-            ) == o.class;
+            let fnoise = feature_noise.as_ref();
+            bm = decide(models, m.ln_force, m.ln_duration, fnoise) == o.class;
+            let (lf, ld) = (
+                m.ln_force - bias.bias_ln_force,
+                m.ln_duration - bias.bias_ln_duration,
+            );
+            bd = decide(models, lf, ld, fnoise) == o.class;
         }
         c.forced_right += forced as u64;
         c.oracle_right += oracle as u64;
         c.bayes_measured_right += bm as u64;
         c.bayes_debiased_right += bd as u64;
-        indicators[o.class].push([
-            forced as u8 as f64,
-            bm as u8 as f64,
-            bd as u8 as f64,
-            oracle as u8 as f64,
-        ]);
+        t.indicators[o.class].push([forced, bm, bd, oracle].map(|b| b as u8 as f64));
     }
-    for c in &mut per_class {
+    for c in &mut t.per_class {
         c.forced_choice_accuracy = share(c.forced_right, c.impacts);
     }
+    t
+}
 
-    // Prior-weighted rates.
-    let weighted = |f: &dyn Fn(&ClassCounts) -> u64| -> f64 {
-        per_class
+impl Tally {
+    /// Prior-weighted share of a class count: `sum_c prior_c f(c) / impacts_c`.
+    fn weighted(&self, f: impl Fn(&ClassCounts) -> u64) -> f64 {
+        self.per_class
             .iter()
             .map(|c| c.prior * share(f(c), c.impacts))
             .sum()
-    };
-    let forced_choice_accuracy = weighted(&|c| c.forced_right);
-    let forced_choice_std_error = per_class
-        .iter()
-        .map(|c| {
-            let a = share(c.forced_right, c.impacts);
-            c.prior * c.prior * a * (1.0 - a) / c.impacts.max(1) as f64
-        })
-        .sum::<f64>()
-        .sqrt();
-    let detected = weighted(&|c| c.detected);
-    let decided = weighted(&|c| c.decided);
-    let decided_wrong = weighted(&|c| c.decided - c.decided_right);
-    let column_share = |col: usize| -> f64 {
-        per_class
+    }
+
+    /// Standard error of the prior-weighted forced-choice accuracy:
+    /// `sqrt(sum_c prior_c^2 a_c (1 - a_c) / n_c)`.
+    fn forced_choice_std_error(&self) -> f64 {
+        self.per_class
+            .iter()
+            .map(|c| {
+                let a = share(c.forced_right, c.impacts);
+                c.prior * c.prior * a * (1.0 - a) / c.impacts.max(1) as f64
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// Prior-weighted share of the impacts in confusion column `col`.
+    fn column_share(&self, col: usize) -> f64 {
+        self.per_class
             .iter()
             .enumerate()
-            .map(|(i, c)| c.prior * share(confusion[i][col], c.impacts))
+            .map(|(i, c)| c.prior * share(self.confusion[i][col], c.impacts))
             .sum()
-    };
-    let paired = |a: usize, b: usize| -> Paired {
+    }
+
+    /// Prior-weighted mean of the paired difference of indicators `a` and `b`, with its
+    /// standard error (each class's sample variance over its impacts).
+    fn paired(&self, a: usize, b: usize) -> Paired {
         let mut difference = 0.0;
         let mut var = 0.0;
-        for (c, rows) in per_class.iter().zip(&indicators) {
+        for (c, rows) in self.per_class.iter().zip(&self.indicators) {
             let n = rows.len().max(1) as f64;
             let d: Vec<f64> = rows.iter().map(|r| r[a] - r[b]).collect();
             let mean = d.iter().sum::<f64>() / n;
@@ -794,75 +816,136 @@ fn run<const N: usize, M: Backend + Send + Sync>(
             difference,
             std_error: var.sqrt(),
         }
-    };
-    let mut columns: Vec<String> = scene.classes.iter().map(|c| c.name.clone()).collect();
-    columns.extend(
-        ["ambiguous", "out_of_envelope", "rejected", "missed"]
-            .iter()
-            .map(|s| s.to_string()),
+    }
+}
+
+/// `num / den`, 0 when `den` is not positive.
+fn ratio(num: f64, den: f64) -> f64 {
+    if den > 0.0 { num / den } else { 0.0 }
+}
+
+/// The evaluation of `scene` with `opts`, in phases: options, pairing tolerance, streams
+/// replayed, noise and the limits (Bayes, reference), tallies, and the rates of [`Evaluation`].
+fn run<const N: usize, M: Backend + Send + Sync>(
+    scene: &SceneFile,
+    opts: &EvalOptions,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Evaluation, EvalError> {
+    validate_options(opts)?;
+    let m = &opts.chain_mismatch;
+    let kernel_scene = scene_to_kernel_in::<N, M>(&m.applied_to(scene))?;
+    let models = class_models(scene);
+    let tolerance = match_tolerance(scene, opts)?;
+    let replayed =
+        replay_streams::<N, M>(scene, opts, &kernel_scene, &models, tolerance, progress)?;
+    // 4. Noise, the Bayes limit (independent Monte Carlo draws) and the reference limit.
+    let k = scene.classes.len();
+    let noise = estimate_noise(&replayed.outcomes, k + 2);
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    rng.set_stream(RNG_BAYES);
+    let mut uniform = || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    let fnoise = noise.feature_noise();
+    let bayes = bayes_accuracy(
+        &models,
+        fnoise.as_ref(),
+        opts.bayes_draws_per_class,
+        &mut uniform,
     );
-    Ok(Evaluation {
+    let reference = reference_limit(scene, &opts.reference, opts.seed)?;
+    let tally = tally(scene, &replayed.outcomes, &models, &noise, opts.n_per_class);
+    let limits = Limits {
+        bayes,
+        reference,
+        kernel_bayes_error: separability_from_kernel(&kernel_scene.separability()).1,
+        equaliser_noise_gain: kernel_scene.equaliser().noise_gain() as f64,
+        confidence_threshold: kernel_scene.settings().confidence_threshold() as f64,
+    };
+    Ok(assemble::<M>(
+        scene, opts, tolerance, replayed, noise, tally, limits,
+    ))
+}
+
+/// Phase 4's limits and the kernel scene's figures an [`Evaluation`] reports.
+struct Limits {
+    bayes: Accuracy,
+    reference: ReferenceLimit,
+    kernel_bayes_error: f64,
+    equaliser_noise_gain: f64,
+    confidence_threshold: f64,
+}
+
+/// Phase 6: the rates of an [`Evaluation`] from the tallies, the limits and the totals.
+fn assemble<M: Backend>(
+    scene: &SceneFile,
+    opts: &EvalOptions,
+    tolerance: u64,
+    replayed: Replayed,
+    noise: NoiseEstimate,
+    t: Tally,
+    limits: Limits,
+) -> Evaluation {
+    let k = scene.classes.len();
+    let forced_choice_accuracy = t.weighted(|c| c.forced_right);
+    let forced_choice_std_error = t.forced_choice_std_error();
+    let (detected, decided) = (t.weighted(|c| c.detected), t.weighted(|c| c.decided));
+    let decided_wrong = t.weighted(|c| c.decided - c.decided_right);
+    let names = scene.classes.iter().map(|c| c.name.clone());
+    let extra = ["ambiguous", "out_of_envelope", "rejected", "missed"].map(String::from);
+    let priors = scene.class_probabilities();
+    let m = &opts.chain_mismatch;
+    let Limits {
+        bayes, reference, ..
+    } = limits;
+    Evaluation {
         scene: scene.name.clone(),
-        classes: scene.classes.iter().map(|c| c.name.clone()).collect(),
+        classes: names.clone().collect(),
         backend: M::NAME,
         n_per_class: opts.n_per_class,
         seed: opts.seed,
         impacts_per_stream: opts.impacts_per_stream,
         match_tolerance_samples: tolerance,
-        columns,
+        columns: names.chain(extra).collect(),
         forced_choice_accuracy,
         forced_choice_std_error,
-        coverage: if detected > 0.0 {
-            decided / detected
-        } else {
-            0.0
-        },
-        confident_error_rate: if decided > 0.0 {
-            decided_wrong / decided
-        } else {
-            0.0
-        },
-        ambiguous_share: column_share(col_amb),
-        out_of_envelope_share: column_share(col_out),
-        rejected_share: column_share(col_rej),
-        missed_share: column_share(col_miss),
-        spurious_reports: spurious,
-        equaliser_noise_gain: kernel_scene.equaliser().noise_gain() as f64,
+        coverage: ratio(decided, detected),
+        confident_error_rate: ratio(decided_wrong, decided),
+        ambiguous_share: t.column_share(k),
+        out_of_envelope_share: t.column_share(k + 1),
+        rejected_share: t.column_share(k + 2),
+        missed_share: t.column_share(k + 3),
+        spurious_reports: replayed.spurious,
+        equaliser_noise_gain: limits.equaliser_noise_gain,
         chain_mismatch: [m.frequency, m.damping, m.gain],
-        confidence_threshold: kernel_scene.settings().confidence_threshold() as f64,
+        confidence_threshold: limits.confidence_threshold,
         kernel_vs_reference: Paired {
             difference: forced_choice_accuracy - reference.accuracy,
             std_error: forced_choice_std_error.hypot(reference.std_error),
         },
         reference,
-        reliability: reliability(outcomes.iter().filter_map(|o| {
+        reliability: reliability(replayed.outcomes.iter().filter_map(|o| {
             let w = priors[o.class] / opts.n_per_class as f64;
             o.posterior.map(|p| (p, o.forced == Some(o.class), w))
         })),
         kernel_noise_bayes_accuracy: bayes.accuracy,
         kernel_noise_bayes_std_error: bayes.std_error,
         kernel_noise_bayes_draws: bayes.n,
-        kernel_bayes_error: separability_from_kernel(&kernel_scene.separability()).1,
-        oracle_accuracy: weighted(&|c| c.oracle_right),
-        bayes_on_measured_accuracy: weighted(&|c| c.bayes_measured_right),
-        bayes_on_measured_debiased_accuracy: weighted(&|c| c.bayes_debiased_right),
-        kernel_vs_bayes_on_measured: paired(0, 1),
-        bias_loss: paired(1, 2),
-        measured_vs_oracle: paired(2, 3),
+        kernel_bayes_error: limits.kernel_bayes_error,
+        oracle_accuracy: t.weighted(|c| c.oracle_right),
+        bayes_on_measured_accuracy: t.weighted(|c| c.bayes_measured_right),
+        bayes_on_measured_debiased_accuracy: t.weighted(|c| c.bayes_debiased_right),
+        kernel_vs_bayes_on_measured: t.paired(0, 1),
+        bias_loss: t.paired(1, 2),
+        measured_vs_oracle: t.paired(2, 3),
         noise,
-        confusion,
-        forced_confusion,
-        rejected_by_reason,
-        per_class,
-        samples_fed,
-        pulses_detected,
-        kernel_seconds,
-        kernel_ns_per_sample: if samples_fed > 0 {
-            kernel_seconds * 1e9 / samples_fed as f64
-        } else {
-            0.0
-        },
-    })
+        confusion: t.confusion,
+        forced_confusion: t.forced_confusion,
+        rejected_by_reason: replayed.rejected_by_reason,
+        per_class: t.per_class,
+        samples_fed: replayed.samples_fed,
+        pulses_detected: replayed.pulses_detected,
+        kernel_seconds: replayed.kernel_seconds,
+        kernel_ns_per_sample: ratio(replayed.kernel_seconds * 1e9, replayed.samples_fed as f64),
+    }
 }
 
 /// One stream of one class: its seed's impacts, simulated and replayed.
