@@ -658,18 +658,14 @@ fn find_event(
     }
 }
 
-/// Integrates one contact from first contact to separation.
-///
-/// Errors on invalid input, on reaching [`Limits::max_steps`] or [`Limits::max_time_tc`],
-/// on a non-finite state or on step-size underflow.
-pub fn integrate_contact(
+/// Phase 1 of [`integrate_contact`]: the problem, method, tolerance and limits are in range.
+fn validate_contact(
     problem: &ContactProblem,
     method: Method,
     tol: Tolerance,
     limits: &Limits,
-) -> Result<ContactSolution, SimError> {
-    let law = problem.law;
-    law.validate()?;
+) -> Result<(), SimError> {
+    problem.law.validate()?;
     positive("mass_kg", problem.mass_kg)?;
     positive("speed_m_s", problem.speed_m_s)?;
     if !(problem.gravity_m_s2.is_finite() && problem.gravity_m_s2 >= 0.0) {
@@ -697,11 +693,14 @@ pub fn integrate_contact(
     if let Some(h0) = limits.initial_step_tc {
         positive("limits.initial_step_tc", h0)?;
     }
+    Ok(())
+}
 
-    let m = problem.mass_kg;
-    let u = problem.speed_m_s;
-    let k = law.stiffness();
-    let n = law.exponent();
+/// Phase 2: the scales of the integration, `delta_max = ((n + 1) m u^2 / (2 k))^(1/(n + 1))`
+/// and `T = 2.9432751843247 delta_max / u`, both finite and positive.
+fn contact_scales(problem: &ContactProblem) -> Result<Scales, SimError> {
+    let (m, u) = (problem.mass_kg, problem.speed_m_s);
+    let (k, n) = (problem.law.stiffness(), problem.law.exponent());
     let d_m = ((n + 1.0) * m * u * u / (2.0 * k)).powf(1.0 / (n + 1.0));
     let time_s = HERTZ_TC_FACTOR * d_m / u;
     if !(d_m.is_finite() && d_m > 0.0 && time_s.is_finite() && time_s > 0.0) {
@@ -711,78 +710,91 @@ pub fn integrate_contact(
             requirement: "giving a finite, positive Hertz penetration",
         });
     }
-    let scales = Scales {
+    Ok(Scales {
         delta_m: d_m,
         time_s,
         speed_m_s: u,
-    };
-    let mut rhs = Rhs {
-        law,
-        d_m,
-        u_m_s: u,
-        cx: HERTZ_TC_FACTOR,
-        g: time_s * problem.gravity_m_s2 / u,
-        p: time_s / (u * m),
-        evals: 0,
-        last_force_n: 0.0,
-    };
-    let mut x_kink = law.kink_m().map(|d| d / d_m);
-    let mut clamp_switch = ClampSwitch { law, d_m, u_m_s: u };
-    // A history-dependent law: the law after the turn, from scaled time turned.0 on.
-    let mut turned: Option<(f64, ForceLaw)> = None;
+    })
+}
 
-    let mut work = WorkStats::default();
-    let mut segments: Vec<Segment> = Vec::new();
-    // The force (N) at each segment's start, known from the stepping (the peak search's grid).
-    let mut start_force_n: Vec<f64> = Vec::new();
-    let mut t = 0.0_f64;
-    let mut y = [0.0, 1.0];
-    let mut f = rhs.f(y);
-    let mut force_n = rhs.last_force_n;
+/// Dopri5's controller (Hairer's DOPRI5: beta = 0.04, safety 0.9, factors 0.2..10).
+const BETA: f64 = 0.04;
+/// Safety factor of the step-size controller.
+const SAFE: f64 = 0.9;
+/// Smallest step-size factor (`h_new >= FACMIN h`).
+const FACMIN: f64 = 0.2;
+/// Largest step-size factor (`h_new <= FACMAX h`).
+const FACMAX: f64 = 10.0;
+/// RK4's steps are graded down near first contact, up to scaled time `T1`.
+const T1: f64 = 1.0 / 16.0;
 
-    // Dopri5 controller state (Hairer's DOPRI5: beta = 0.04, safety 0.9, factors 0.2..10).
-    const BETA: f64 = 0.04;
-    const SAFE: f64 = 0.9;
-    const FACMIN: f64 = 0.2;
-    const FACMAX: f64 = 10.0;
-    let expo1 = 0.2 - BETA * 0.75;
-    // ln of Hairer's `facold` (the last accepted error, at least 1e-4): the controller's
-    // factor `err^expo1 / facold^BETA` is one exp of logs, not two powf.
-    let ln_facold_min = 1e-4_f64.ln();
-    let mut ln_facold = ln_facold_min;
-    let mut last_rejected = false;
-    let hmax = limits.max_step_tc;
-    let mut h = limits
-        .initial_step_tc
-        .unwrap_or_else(|| 0.1 * tol.rtol.powf(0.4))
-        .min(hmax);
-    // RK4 grading.
-    let h_rk = match method {
-        Method::Rk4 { steps_per_tc } => 1.0 / f64::from(steps_per_tc),
-        Method::Dopri5 => 0.0,
-    };
-    const T1: f64 = 1.0 / 16.0;
-    let mut retry_scale = 1.0_f64;
+/// The step size and its controller: Dopri5's error-per-step control with Hairer's
+/// stabilisation (`facold`), or RK4's graded fixed steps.
+struct StepControl {
+    method: Method,
+    tol: Tolerance,
+    /// The next trial step (scaled time).
+    h: f64,
+    /// Largest step.
+    hmax: f64,
+    /// `0.2 - 0.75 BETA`, the exponent of the error in the controller's factor.
+    expo1: f64,
+    /// ln of Hairer's `facold` (the last accepted error, at least 1e-4): the controller's
+    /// factor `err^expo1 / facold^BETA` is one exp of logs, not two powf.
+    ln_facold: f64,
+    /// Whether the last trial was rejected (then the step may not grow).
+    last_rejected: bool,
+    /// RK4's ungraded step `1 / steps_per_tc` (0 for Dopri5).
+    h_rk: f64,
+    /// RK4's step factor after event retries (1, halved per retry).
+    retry_scale: f64,
+}
 
-    loop {
-        if work.steps + work.rejected_steps >= limits.max_steps {
-            return Err(SimError::MaxSteps {
-                max_steps: limits.max_steps,
-                t_s: t * time_s,
-            });
+/// `ln 1e-4`, the least `ln facold`.
+fn ln_facold_min() -> f64 {
+    1e-4_f64.ln()
+}
+
+impl StepControl {
+    fn new(method: Method, tol: Tolerance, limits: &Limits) -> Self {
+        let hmax = limits.max_step_tc;
+        StepControl {
+            method,
+            tol,
+            h: limits
+                .initial_step_tc
+                .unwrap_or_else(|| 0.1 * tol.rtol.powf(0.4))
+                .min(hmax),
+            hmax,
+            expo1: 0.2 - BETA * 0.75,
+            ln_facold: ln_facold_min(),
+            last_rejected: false,
+            h_rk: match method {
+                Method::Rk4 { steps_per_tc } => 1.0 / f64::from(steps_per_tc),
+                Method::Dopri5 => 0.0,
+            },
+            retry_scale: 1.0,
         }
-        if t > limits.max_time_tc {
-            return Err(SimError::NoSeparation { t_s: t * time_s });
-        }
-        let trial = match method {
+    }
+
+    /// One trial step of size `h` (RK4: graded by the time since contact or to its end).
+    fn trial(
+        &mut self,
+        rhs: &mut Rhs,
+        t: f64,
+        y: [f64; 2],
+        f: [f64; 2],
+        time_s: f64,
+    ) -> Result<Trial, SimError> {
+        match self.method {
             Method::Dopri5 => {
-                if h <= 16.0 * f64::EPSILON * t.max(1e-3) {
+                if self.h <= 16.0 * f64::EPSILON * t.max(1e-3) {
                     return Err(SimError::StepSizeUnderflow {
                         t_s: t * time_s,
-                        h_s: h * time_s,
+                        h_s: self.h * time_s,
                     });
                 }
-                dopri_step(&mut rhs, t, y, f, h, tol)
+                Ok(dopri_step(rhs, t, y, f, self.h, self.tol))
             }
             Method::Rk4 { .. } => {
                 let to_end = if y[1] < 0.0 {
@@ -791,141 +803,314 @@ pub fn integrate_contact(
                     f64::INFINITY
                 };
                 let s = t.min(to_end).max(0.0);
-                let grade = (s / T1).sqrt().max(h_rk / T1).min(1.0);
-                h = h_rk * grade * retry_scale;
-                rk4_step(&mut rhs, t, y, f, h)
+                let grade = (s / T1).sqrt().max(self.h_rk / T1).min(1.0);
+                self.h = self.h_rk * grade * self.retry_scale;
+                Ok(rk4_step(rhs, t, y, f, self.h))
             }
+        }
+    }
+
+    /// The error test of a finite trial: `Some(h_next)` when accepted, `None` when rejected
+    /// (the step shrunk for the retry). RK4 accepts every step.
+    fn accept(&mut self, err: f64) -> Option<f64> {
+        if let Method::Rk4 { .. } = self.method {
+            return Some(self.h);
+        }
+        let ln_err = err.ln();
+        if err > 1.0 {
+            let fac11 = (self.expo1 * ln_err).exp();
+            self.h /= (fac11 / SAFE).min(1.0 / FACMIN);
+            self.last_rejected = true;
+            return None;
+        }
+        let fac = ((self.expo1 * ln_err - BETA * self.ln_facold).exp() / SAFE)
+            .clamp(1.0 / FACMAX, 1.0 / FACMIN);
+        self.ln_facold = ln_err.max(ln_facold_min());
+        let mut h_next = (self.h / fac).min(self.hmax);
+        if self.last_rejected {
+            h_next = h_next.min(self.h);
+        }
+        self.last_rejected = false;
+        Some(h_next)
+    }
+
+    /// A non-finite trial: Dopri5 shrinks strongly and retries (`true`); RK4 cannot.
+    fn retry_non_finite(&mut self) -> bool {
+        if let Method::Dopri5 = self.method {
+            self.h *= FACMIN;
+            self.last_rejected = true;
+            return true;
+        }
+        false
+    }
+
+    /// An event search that asks for a smaller step: the step is halved.
+    fn halve(&mut self) {
+        match self.method {
+            Method::Dopri5 => self.h *= 0.5,
+            Method::Rk4 { .. } => self.retry_scale *= 0.5,
+        }
+    }
+
+    /// The step to an event, of size `he`, failed its error test `err`: retry with
+    /// `he (0.9 err^(-1/5))`, the factor in `[FACMIN, 1]` (`FACMIN` for a non-finite error).
+    fn shrink_to_event(&mut self, he: f64, err: f64) {
+        let shrink = if err.is_finite() {
+            (SAFE * err.powf(-0.2)).clamp(FACMIN, 1.0)
+        } else {
+            FACMIN
         };
+        self.h = he * shrink;
+        self.last_rejected = true;
+    }
+
+    /// After an accepted step: the next trial is `h_next`, unscaled.
+    fn advance(&mut self, h_next: f64) {
+        self.h = h_next;
+        self.retry_scale = 1.0;
+    }
+
+    /// A step of size `h` from `(t, y, f)` with this method (the step to an event).
+    fn step(&self, rhs: &mut Rhs, t: f64, y: [f64; 2], f: [f64; 2], h: f64) -> Trial {
+        match self.method {
+            Method::Dopri5 => dopri_step(rhs, t, y, f, h, self.tol),
+            Method::Rk4 { .. } => rk4_step(rhs, t, y, f, h),
+        }
+    }
+}
+
+/// The state of one contact's integration: the right-hand side (whose law turns), the
+/// accepted steps' continuous output, and where the last step ended.
+struct ContactRun {
+    /// The law given (the clamp's presence and the finish read it).
+    law: ForceLaw,
+    rhs: Rhs,
+    scales: Scales,
+    /// The kink in scaled penetration, when the current law has one.
+    x_kink: Option<f64>,
+    clamp_switch: ClampSwitch,
+    /// A history-dependent law: the law after the turn, from scaled time turned.0 on.
+    turned: Option<(f64, ForceLaw)>,
+    work: WorkStats,
+    segments: Vec<Segment>,
+    /// The force (N) at each segment's start, known from the stepping (the peak search's grid).
+    start_force_n: Vec<f64>,
+    t: f64,
+    y: [f64; 2],
+    f: [f64; 2],
+    force_n: f64,
+}
+
+/// What the step to an event did.
+enum EventStep {
+    /// The step failed its error test: retry with a smaller step.
+    Retry,
+    /// The contact ended.
+    End(Box<ContactSolution>),
+    /// Landed on a kink, turn or clamp switch; the integration goes on.
+    Restart,
+}
+
+impl ContactRun {
+    fn new(problem: &ContactProblem, scales: Scales) -> Self {
+        let law = problem.law;
+        let (d_m, u, time_s) = (scales.delta_m, scales.speed_m_s, scales.time_s);
+        let mut rhs = Rhs {
+            law,
+            d_m,
+            u_m_s: u,
+            cx: HERTZ_TC_FACTOR,
+            g: time_s * problem.gravity_m_s2 / u,
+            p: time_s / (u * problem.mass_kg),
+            evals: 0,
+            last_force_n: 0.0,
+        };
+        let y = [0.0, 1.0];
+        let f = rhs.f(y);
+        let force_n = rhs.last_force_n;
+        ContactRun {
+            law,
+            rhs,
+            scales,
+            x_kink: law.kink_m().map(|d| d / d_m),
+            clamp_switch: ClampSwitch { law, d_m, u_m_s: u },
+            turned: None,
+            work: WorkStats::default(),
+            segments: Vec::new(),
+            start_force_n: Vec::new(),
+            t: 0.0,
+            y,
+            f,
+            force_n,
+        }
+    }
+
+    /// The errors of a run that goes on too long: too many steps, or no separation in time.
+    fn check_limits(&self, limits: &Limits) -> Result<(), SimError> {
+        let t_s = self.t * self.scales.time_s;
+        if self.work.steps + self.work.rejected_steps >= limits.max_steps {
+            return Err(SimError::MaxSteps {
+                max_steps: limits.max_steps,
+                t_s,
+            });
+        }
+        if self.t > limits.max_time_tc {
+            return Err(SimError::NoSeparation { t_s });
+        }
+        Ok(())
+    }
+
+    /// The first event inside `trial` (see [`find_event`]), as `(theta, landing, is_end)`;
+    /// `Err(())` when the search asks for a smaller step.
+    fn event_in(&self, trial: &Trial) -> Result<Option<(f64, Landing, bool)>, ()> {
+        let ends = (
+            self.rhs.law.contact_end_m() / self.scales.delta_m,
+            self.rhs.law.awaits_turn(),
+        );
+        Ok(
+            match find_event(
+                &trial.seg,
+                self.x_kink,
+                ends,
+                self.law.is_clamped().then_some(&self.clamp_switch),
+                MAX_CLAMP_RESTARTS.saturating_sub(self.work.clamp_restarts),
+            ) {
+                Some(Event::Retry) => return Err(()),
+                Some(Event::End(th)) => Some((th, Landing::X(ends.0), true)),
+                Some(Event::Kink(th)) => {
+                    Some((th, self.x_kink.map_or(Landing::Free, Landing::X), false))
+                }
+                Some(Event::Turn(th)) => Some((th, Landing::V, false)),
+                Some(Event::Clamp(th)) => Some((th, Landing::Free, false)),
+                None => None,
+            },
+        )
+    }
+
+    /// Takes the accepted `trial` of size `h` whole.
+    fn take(&mut self, trial: Trial, h: f64) {
+        self.work.steps += 1;
+        self.segments.push(trial.seg);
+        self.start_force_n.push(self.force_n);
+        self.t += h;
+        self.y = trial.y1;
+        self.f = trial.f1;
+        self.force_n = trial.force1_n;
+    }
+
+    /// Steps to the event at `theta` of a step of size `h` and lands on it by one Newton
+    /// correction onto `x = target` (end and kink) or `v = 0` (turn); none for a clamp switch.
+    /// The step to the event is a step too: it must pass the error test (it fails when the
+    /// force switches on or off inside it), else the step is retried smaller and the event is
+    /// found again later.
+    fn step_to_event(
+        &mut self,
+        ctl: &mut StepControl,
+        (theta, target, is_end): (f64, Landing, bool),
+        problem: &ContactProblem,
+    ) -> EventStep {
+        let he = theta * ctl.h;
+        let (t, y, f) = (self.t, self.y, self.f);
+        let (ye, fe, mut seg) = if he > 0.0 {
+            let tr = ctl.step(&mut self.rhs, t, y, f, he);
+            if tr.err > 1.0 || !(tr.y1[0].is_finite() && tr.y1[1].is_finite()) {
+                self.work.rejected_steps += 1;
+                ctl.shrink_to_event(he, tr.err);
+                return EventStep::Retry;
+            }
+            (tr.y1, tr.f1, tr.seg)
+        } else {
+            (y, f, Segment::hermite(t, 0.0, y, f, y, f))
+        };
+        self.work.steps += 1;
+        let (dt, y_e) = target.land(ye, fe);
+        let t_e = t + he + dt;
+        seg.h = t_e - t;
+        self.segments.push(seg);
+        self.start_force_n.push(self.force_n);
+        if is_end {
+            return EventStep::End(Box::new(self.finish(t_e, y_e, problem)));
+        }
+        match target {
+            Landing::X(_) => self.work.kink_restarts += 1,
+            Landing::Free => self.work.clamp_restarts += 1,
+            Landing::V => {
+                self.work.turns += 1;
+                self.rhs.law = self.rhs.law.turned_at(y_e[0] * self.scales.delta_m);
+                self.clamp_switch.law = self.rhs.law;
+                self.x_kink = self.rhs.law.kink_m().map(|d| d / self.scales.delta_m);
+                self.turned = Some((t_e, self.rhs.law));
+            }
+        }
+        self.t = t_e;
+        self.y = y_e;
+        self.f = self.rhs.f(y_e);
+        self.force_n = self.rhs.last_force_n;
+        EventStep::Restart
+    }
+
+    /// The solution of a contact that ended at scaled time `t_e` in state `y_e`.
+    fn finish(&mut self, t_e: f64, y_e: [f64; 2], problem: &ContactProblem) -> ContactSolution {
+        let rebound = -y_e[1] * self.scales.speed_m_s;
+        let duration_s = t_e * self.scales.time_s;
+        self.work.force_evals = self.rhs.evals;
+        finish(
+            (self.law, self.turned),
+            self.scales,
+            std::mem::take(&mut self.segments),
+            &self.start_force_n,
+            self.work,
+            duration_s,
+            rebound,
+            problem.mass_kg,
+            problem.gravity_m_s2,
+        )
+    }
+}
+
+/// Integrates one contact from first contact to separation.
+///
+/// Errors on invalid input, on reaching [`Limits::max_steps`] or [`Limits::max_time_tc`],
+/// on a non-finite state or on step-size underflow.
+pub fn integrate_contact(
+    problem: &ContactProblem,
+    method: Method,
+    tol: Tolerance,
+    limits: &Limits,
+) -> Result<ContactSolution, SimError> {
+    validate_contact(problem, method, tol, limits)?;
+    let scales = contact_scales(problem)?;
+    let mut run = ContactRun::new(problem, scales);
+    let mut ctl = StepControl::new(method, tol, limits);
+    loop {
+        run.check_limits(limits)?;
+        let trial = ctl.trial(&mut run.rhs, run.t, run.y, run.f, scales.time_s)?;
         if !(trial.y1[0].is_finite() && trial.y1[1].is_finite() && trial.err.is_finite()) {
-            if let Method::Dopri5 = method {
-                // Treat as a failed step: shrink strongly and retry.
-                work.rejected_steps += 1;
-                h *= FACMIN;
-                last_rejected = true;
+            if ctl.retry_non_finite() {
+                run.work.rejected_steps += 1;
                 continue;
             }
-            return Err(SimError::NonFinite { t_s: t * time_s });
+            return Err(SimError::NonFinite {
+                t_s: run.t * scales.time_s,
+            });
         }
-        let mut h_next = h;
-        if let Method::Dopri5 = method {
-            let ln_err = trial.err.ln();
-            if trial.err > 1.0 {
-                work.rejected_steps += 1;
-                let fac11 = (expo1 * ln_err).exp();
-                h /= (fac11 / SAFE).min(1.0 / FACMIN);
-                last_rejected = true;
-                continue;
-            }
-            let fac = ((expo1 * ln_err - BETA * ln_facold).exp() / SAFE)
-                .clamp(1.0 / FACMAX, 1.0 / FACMIN);
-            ln_facold = ln_err.max(ln_facold_min);
-            h_next = (h / fac).min(hmax);
-            if last_rejected {
-                h_next = h_next.min(h);
-            }
-            last_rejected = false;
-        }
-        let ends = (rhs.law.contact_end_m() / d_m, rhs.law.awaits_turn());
-        let event = match find_event(
-            &trial.seg,
-            x_kink,
-            ends,
-            law.is_clamped().then_some(&clamp_switch),
-            MAX_CLAMP_RESTARTS.saturating_sub(work.clamp_restarts),
-        ) {
-            Some(Event::Retry) => {
-                work.rejected_steps += 1;
-                match method {
-                    Method::Dopri5 => h *= 0.5,
-                    Method::Rk4 { .. } => retry_scale *= 0.5,
-                }
-                continue;
-            }
-            Some(Event::End(th)) => Some((th, Landing::X(ends.0), true)),
-            Some(Event::Kink(th)) => Some((th, x_kink.map_or(Landing::Free, Landing::X), false)),
-            Some(Event::Turn(th)) => Some((th, Landing::V, false)),
-            Some(Event::Clamp(th)) => Some((th, Landing::Free, false)),
-            None => None,
+        let Some(h_next) = ctl.accept(trial.err) else {
+            run.work.rejected_steps += 1;
+            continue;
         };
-        match event {
-            Some((theta, target, is_end)) => {
-                let he = theta * h;
-                let (ye, fe, seg) = if he > 0.0 {
-                    let tr = match method {
-                        Method::Dopri5 => dopri_step(&mut rhs, t, y, f, he, tol),
-                        Method::Rk4 { .. } => rk4_step(&mut rhs, t, y, f, he),
-                    };
-                    if tr.err > 1.0 || !(tr.y1[0].is_finite() && tr.y1[1].is_finite()) {
-                        // The step to the event is a step too: it must pass the error test
-                        // (it fails when the force switches on or off inside it). Retry from
-                        // here with a smaller step; the event is found again later.
-                        work.rejected_steps += 1;
-                        let shrink = if tr.err.is_finite() {
-                            (SAFE * tr.err.powf(-0.2)).clamp(FACMIN, 1.0)
-                        } else {
-                            FACMIN
-                        };
-                        h = he * shrink;
-                        last_rejected = true;
-                        continue;
-                    }
-                    (tr.y1, tr.f1, tr.seg)
-                } else {
-                    (y, f, Segment::hermite(t, 0.0, y, f, y, f))
-                };
-                work.steps += 1;
-                // Newton correction onto x = target (end and kink), onto v = 0 (turn); none for
-                // a clamp switch.
-                let (dt, y_e) = target.land(ye, fe);
-                let t_e = t + he + dt;
-                let mut seg = seg;
-                seg.h = t_e - t;
-                segments.push(seg);
-                start_force_n.push(force_n);
-                if is_end {
-                    let rebound = -y_e[1] * u;
-                    let duration_s = t_e * time_s;
-                    work.force_evals = rhs.evals;
-                    return Ok(finish(
-                        (law, turned),
-                        scales,
-                        segments,
-                        &start_force_n,
-                        work,
-                        duration_s,
-                        rebound,
-                        m,
-                        problem.gravity_m_s2,
-                    ));
-                }
-                match target {
-                    Landing::X(_) => work.kink_restarts += 1,
-                    Landing::Free => work.clamp_restarts += 1,
-                    Landing::V => {
-                        work.turns += 1;
-                        rhs.law = rhs.law.turned_at(y_e[0] * d_m);
-                        clamp_switch.law = rhs.law;
-                        x_kink = rhs.law.kink_m().map(|d| d / d_m);
-                        turned = Some((t_e, rhs.law));
-                    }
-                }
-                t = t_e;
-                y = y_e;
-                f = rhs.f(y);
-                force_n = rhs.last_force_n;
-                h = h_next;
-                retry_scale = 1.0;
+        match run.event_in(&trial) {
+            Err(()) => {
+                run.work.rejected_steps += 1;
+                ctl.halve();
             }
-            None => {
-                work.steps += 1;
-                segments.push(trial.seg);
-                start_force_n.push(force_n);
-                t += h;
-                y = trial.y1;
-                f = trial.f1;
-                force_n = trial.force1_n;
-                h = h_next;
-                retry_scale = 1.0;
+            Ok(Some(event)) => match run.step_to_event(&mut ctl, event, problem) {
+                EventStep::Retry => {}
+                EventStep::End(solution) => return Ok(*solution),
+                EventStep::Restart => ctl.advance(h_next),
+            },
+            Ok(None) => {
+                run.take(trial, ctl.h);
+                ctl.advance(h_next);
             }
         }
     }
