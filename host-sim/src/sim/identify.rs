@@ -658,8 +658,8 @@ fn nearest(cands: &[(f64, f64)], f: f64) -> Option<(f64, f64)> {
         .min_by(|a, b| (a.0 - f).abs().total_cmp(&(b.0 - f).abs()))
 }
 
-/// Identifies the chain from `samples` (ADC codes in time order): see the module docs.
-pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identification, IdentifyError> {
+/// Phase 0: the options are in range.
+fn validate_identify(opts: &IdentifyOptions) -> Result<(), IdentifyError> {
     let fs = opts.sample_rate_hz;
     if !(fs.is_finite() && fs > 0.0) {
         return Err(invalid(
@@ -678,6 +678,259 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
     if opts.modes == Some(0) {
         return Err(invalid("--modes", "must be at least 1".to_string()));
     }
+    Ok(())
+}
+
+/// Phase 1: the free windows `[start, end)` of `len` samples around `pulses`: `windows[0]` is
+/// the lead-in, `windows[k + 1]` follows pulse `k`.
+fn free_windows(pulses: &[PulseSpan], len: usize) -> Vec<(usize, usize)> {
+    let mut starts = vec![0usize];
+    starts.extend(pulses.iter().map(|p| p.last + AFTER_PULSE));
+    let mut ends: Vec<usize> = pulses
+        .iter()
+        .map(|p| p.first.saturating_sub(BEFORE_PULSE))
+        .collect();
+    ends.push(len);
+    starts
+        .iter()
+        .zip(&ends)
+        .map(|(s, e)| (*s, (*e).max(*s).min(len)))
+        .collect()
+}
+
+/// Phase 2's second pass: the Grams of the free windows after the pulses at `lag`, by
+/// jackknife group, and the order the first pass found.
+struct Grams {
+    lag: usize,
+    fs: f64,
+    group_gram: Vec<DMatrix<f64>>,
+    group_rows: [usize; GROUPS],
+    total_gram: DMatrix<f64>,
+    total_rows: usize,
+    /// Windows that gave a Gram.
+    used: usize,
+    min_order: usize,
+}
+
+impl Grams {
+    /// The Grams of `slices[1..]` at a lag suited to the highest frequency `f_max` (Hz) to
+    /// resolve: at most an eighth of its period, at most the median window over
+    /// `2 MODE_LAGS`, at least 1; pencils of order at least `min_order`.
+    fn new(slices: &[&[f64]], f_max: f64, min_order: usize, fs: f64) -> Self {
+        let mut lens: Vec<f64> = slices[1..].iter().map(|w| w.len() as f64).collect();
+        lens.retain(|&l| l > 0.0);
+        let med_len = median(&lens);
+        let lag = ((fs / (8.0 * f_max)).floor() as usize)
+            .min((med_len / (2.0 * MODE_LAGS as f64)).floor() as usize)
+            .max(1);
+        let mut group_gram = vec![DMatrix::<f64>::zeros(MODE_LAGS + 1, MODE_LAGS + 1); GROUPS];
+        let mut group_rows = [0usize; GROUPS];
+        let mut used = 0;
+        for (i, w) in slices.iter().enumerate().skip(1) {
+            if let Some((g, r)) = gram(w, lag, MODE_LAGS) {
+                group_gram[i % GROUPS] += g;
+                group_rows[i % GROUPS] += r;
+                used += 1;
+            }
+        }
+        let zero = DMatrix::zeros(MODE_LAGS + 1, MODE_LAGS + 1);
+        let total_gram: DMatrix<f64> = group_gram.iter().fold(zero, |acc, g| acc + g);
+        Grams {
+            lag,
+            fs,
+            total_rows: group_rows.iter().sum(),
+            group_gram,
+            group_rows,
+            total_gram,
+            used,
+            min_order,
+        }
+    }
+
+    /// The modes `(f, zeta)` of the pencil of Gram `g` over `rows` rows; poles above a quarter
+    /// of the lag's Nyquist frequency are aliases or noise.
+    fn refine(&self, g: &DMatrix<f64>, rows: usize) -> Vec<(f64, f64)> {
+        if rows == 0 {
+            return Vec::new();
+        }
+        let f_top = 0.25 * self.fs / self.lag as f64;
+        let mut m = pencil_from_gram(g, rows, None, self.min_order)
+            .map(|p| modes_of(&p, self.lag, self.fs))
+            .unwrap_or_default();
+        m.retain(|&(f, _)| f < f_top);
+        m
+    }
+
+    /// The modes of every group but `g` (the jackknife's leave-one-group-out pencils).
+    fn leave_out(&self, g: usize) -> Vec<(f64, f64)> {
+        let gram = &self.total_gram - &self.group_gram[g];
+        self.refine(&gram, self.total_rows - self.group_rows[g])
+    }
+}
+
+/// Phase 3: the modes of `modes_fz` (ascending frequency) that ring above the noise (energy
+/// over every fitted window above `20 sigma^2` per window), the strongest `--modes` when
+/// asked, in ascending frequency.
+fn ringing_modes(
+    slices: &[&[f64]],
+    modes_fz: &[(f64, f64)],
+    noise_rms: f64,
+    asked: Option<usize>,
+    fs: f64,
+) -> Result<Vec<(f64, f64)>, IdentifyError> {
+    let poles: Vec<Complex<f64>> = modes_fz.iter().map(|&(f, z)| pole(f, z)).collect();
+    let fits: Vec<Option<WindowFit>> = slices
+        .iter()
+        .map(|w| fit_amplitudes(w, &poles, fs))
+        .collect();
+    let energy: Vec<f64> = (0..poles.len())
+        .map(|j| {
+            fits.iter()
+                .zip(slices)
+                .filter_map(|(f, w)| f.as_ref().map(|c| (c[j], w.len())))
+                .map(|(c, len)| {
+                    // Energy of 2 Re(c z^n) over the window: 2 |c|^2 sum |z|^(2n).
+                    let decay = (2.0 * poles[j].re / fs).exp();
+                    2.0 * c.norm_sqr() * (1.0 - decay.powi(len as i32)) / (1.0 - decay).max(1e-12)
+                })
+                .sum()
+        })
+        .collect();
+    let n_fits = fits.iter().filter(|f| f.is_some()).count().max(1) as f64;
+    let mut keep: Vec<usize> = (0..poles.len()).collect();
+    keep.sort_by(|&a, &b| energy[b].total_cmp(&energy[a]));
+    keep.retain(|&j| energy[j] > 20.0 * noise_rms * noise_rms * n_fits);
+    if let Some(n) = asked {
+        keep.truncate(n);
+    }
+    keep.sort_by(|&a, &b| modes_fz[a].0.total_cmp(&modes_fz[b].0));
+    if keep.is_empty() {
+        return Err(IdentifyError::NotEnough(
+            "no mode rings above the noise in the gaps between pulses".to_string(),
+        ));
+    }
+    Ok(keep.iter().map(|&j| modes_fz[j]).collect())
+}
+
+/// The recording cut into free windows, with the modes' poles and each window's amplitudes.
+struct Rings<'a> {
+    y: &'a [f64],
+    pulses: &'a [PulseSpan],
+    windows: &'a [(usize, usize)],
+    fits: &'a [Option<WindowFit>],
+    poles: &'a [Complex<f64>],
+    fs: f64,
+}
+
+impl Rings<'_> {
+    /// Pulse `k`'s `(group, K_j, Delta c_j)` under the current `gains`: the pulse with the
+    /// ring before it removed, inverted through the beam into the rigid signal `u`,
+    /// `K_j = p_j^2 U(p_j) / (p_j - conj p_j)` and the jump of each mode's amplitude across
+    /// it. `None` without free ring-down on both sides.
+    fn residues(&self, k: usize, steps: &[ModeStep], gains: &[f64]) -> Option<PulseResidues> {
+        let (fs, y, poles) = (self.fs, self.y, self.poles);
+        let (Some(cb), Some(ca)) = (&self.fits[k], &self.fits[k + 1]) else {
+            return None;
+        };
+        let (wb, wa) = (self.windows[k].0, self.windows[k + 1].0);
+        let n0 = self.pulses[k].first.saturating_sub(BEFORE_PULSE);
+        let n1 = self.windows[k + 1].0;
+        if n1 <= n0 || n1 > y.len() {
+            return None;
+        }
+        let pulse: Vec<f64> = (n0..n1)
+            .map(|n| y[n] - ring_at(cb, poles, fs, n as f64 - wb as f64))
+            .collect();
+        let u = invert_beam(&pulse, steps, gains);
+        let mut kk = Vec::with_capacity(poles.len());
+        let mut dc = Vec::with_capacity(poles.len());
+        for (j, pj) in poles.iter().enumerate() {
+            let uk: Complex<f64> = u
+                .iter()
+                .enumerate()
+                .map(|(i, &v)| (-pj * (i as f64 / fs)).exp() * v)
+                .sum::<Complex<f64>>()
+                / fs;
+            let kj = pj * pj * uk / (pj - pj.conj());
+            let before = cb[j] * (pj * ((n0 as f64 - wb as f64) / fs)).exp();
+            let after = ca[j] * (pj * ((n0 as f64 - wa as f64) / fs)).exp();
+            kk.push(kj);
+            dc.push(after - before);
+        }
+        Some((k % GROUPS, kk, dc))
+    }
+
+    /// Phase 4: the gains `g_j = sum Re(conj K_j Delta c_j) / sum |K_j|^2` over the pulses,
+    /// iterated [`GAIN_ITERATIONS`] times (each inversion uses the last gains), with the last
+    /// iteration's residues per pulse.
+    fn gains(&self, steps: &[ModeStep]) -> Result<(Vec<f64>, Vec<PulseResidues>), IdentifyError> {
+        let mut gains = vec![0.0; self.poles.len()];
+        let mut per_pulse: Vec<PulseResidues> = Vec::new();
+        for _ in 0..GAIN_ITERATIONS {
+            per_pulse = (0..self.pulses.len())
+                .filter_map(|k| self.residues(k, steps, &gains))
+                .collect();
+            if per_pulse.is_empty() {
+                return Err(IdentifyError::NotEnough(
+                    "no pulse has free ring-down on both sides".to_string(),
+                ));
+            }
+            for (j, g) in gains.iter_mut().enumerate() {
+                *g = gain_of(&per_pulse, j, None).unwrap_or(0.0);
+            }
+        }
+        Ok((gains, per_pulse))
+    }
+}
+
+/// Mode `j`'s least-squares gain over `per_pulse` (leaving out jackknife group `skip`), `None`
+/// when no pulse carries it.
+fn gain_of(per_pulse: &[PulseResidues], j: usize, skip: Option<usize>) -> Option<f64> {
+    let (num, den) = per_pulse
+        .iter()
+        .filter(|(grp, _, _)| Some(*grp) != skip)
+        .fold((0.0, 0.0), |(n, d), (_, kk, dc)| {
+            (n + (kk[j].conj() * dc[j]).re, d + kk[j].norm_sqr())
+        });
+    (den > 0.0).then(|| num / den)
+}
+
+/// Phase 5: each mode's frequency, damping and gain with its jackknife standard error over
+/// the [`GROUPS`] leave-one-group-out estimates.
+fn jackknifed_modes(
+    grams: &Grams,
+    modes_fz: &[(f64, f64)],
+    gains: &[f64],
+    per_pulse: &[PulseResidues],
+) -> Vec<ModeEstimate> {
+    let loo_modes: Vec<Vec<(f64, f64)>> = (0..GROUPS).map(|g| grams.leave_out(g)).collect();
+    let mut modes = Vec::with_capacity(modes_fz.len());
+    for (j, &(f, z)) in modes_fz.iter().enumerate() {
+        let (mut fj, mut zj, mut gj) = (Vec::new(), Vec::new(), Vec::new());
+        for (g, lm) in loo_modes.iter().enumerate() {
+            if let Some((fl, zl)) = nearest(lm, f) {
+                fj.push(fl);
+                zj.push(zl);
+            }
+            gj.extend(gain_of(per_pulse, j, Some(g)));
+        }
+        let estimate = |value, others: &[f64]| Estimate {
+            value,
+            std_error: jackknife(others),
+        };
+        modes.push(ModeEstimate {
+            frequency_hz: estimate(f, &fj),
+            damping_ratio: estimate(z, &zj),
+            gain: estimate(gains[j], &gj),
+        });
+    }
+    modes
+}
+
+/// Identifies the chain from `samples` (ADC codes in time order): see the module docs.
+pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identification, IdentifyError> {
+    validate_identify(opts)?;
+    let fs = opts.sample_rate_hz;
     let raw: Vec<f64> = samples.iter().map(|&v| v as f64).collect();
     let base = median(&raw);
     let y: Vec<f64> = raw.iter().map(|v| v - base).collect();
@@ -691,19 +944,7 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
             y.len()
         )));
     }
-    // Window i follows pulse i (`None` for the lead-in, before pulse 0).
-    let mut windows: Vec<(usize, usize)> = Vec::new();
-    let mut starts = vec![0usize];
-    starts.extend(pulses.iter().map(|p| p.last + AFTER_PULSE));
-    let mut ends: Vec<usize> = pulses
-        .iter()
-        .map(|p| p.first.saturating_sub(BEFORE_PULSE))
-        .collect();
-    ends.push(y.len());
-    for (s, e) in starts.iter().zip(&ends) {
-        windows.push((*s, (*e).max(*s).min(y.len())));
-    }
-    // windows[0]: lead-in; windows[k + 1]: after pulse k.
+    let windows = free_windows(&pulses, y.len());
     let slices: Vec<&[f64]> = windows.iter().map(|&(s, e)| &y[s..e]).collect();
 
     // 2. Poles: a first pass at lag 1, then at a lag suited to the highest mode.
@@ -727,94 +968,24 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
     let (fast, f_max) = split_fast(&rough_modes, opts.accelerometer, fs);
     let filtered: Vec<Vec<f64>> = slices.iter().map(|w| annihilate(w, fast, fs)).collect();
     let slices_for_poles: Vec<&[f64]> = filtered.iter().map(|w| w.as_slice()).collect();
-    let mut lens: Vec<f64> = slices_for_poles[1..]
-        .iter()
-        .map(|w| w.len() as f64)
-        .collect();
-    lens.retain(|&l| l > 0.0);
-    let med_len = median(&lens);
-    let lag = ((fs / (8.0 * f_max)).floor() as usize)
-        .min((med_len / (2.0 * MODE_LAGS as f64)).floor() as usize)
-        .max(1);
-    // Grams by group for the jackknife.
-    let mut group_gram = vec![DMatrix::<f64>::zeros(MODE_LAGS + 1, MODE_LAGS + 1); GROUPS];
-    let mut group_rows = [0usize; GROUPS];
-    let mut used = 0;
-    for (i, w) in slices_for_poles.iter().enumerate().skip(1) {
-        if let Some((g, r)) = gram(w, lag, MODE_LAGS) {
-            group_gram[i % GROUPS] += g;
-            group_rows[i % GROUPS] += r;
-            used += 1;
-        }
-    }
-    let total_gram: DMatrix<f64> = group_gram
-        .iter()
-        .fold(DMatrix::zeros(MODE_LAGS + 1, MODE_LAGS + 1), |acc, g| {
-            acc + g
-        });
-    let total_rows: usize = group_rows.iter().sum();
-    let min_order = 2 * rough_modes.len();
-    let refine = |g: &DMatrix<f64>, rows: usize| -> Vec<(f64, f64)> {
-        if rows == 0 {
-            return Vec::new();
-        }
-        // Poles above a quarter of the lag's Nyquist frequency are aliases or noise.
-        let f_top = 0.25 * fs / lag as f64;
-        let mut m = pencil_from_gram(g, rows, None, min_order)
-            .map(|p| modes_of(&p, lag, fs))
-            .unwrap_or_default();
-        m.retain(|&(f, _)| f < f_top);
-        m
-    };
-    let refined = refine(&total_gram, total_rows);
+    let grams = Grams::new(&slices_for_poles, f_max, 2 * rough_modes.len(), fs);
     // The refined pencil resolves what the first pass merges (poles crowded near z = 1); its
     // band (a quarter of the lag's Nyquist frequency) holds every mode of the first pass.
+    let refined = grams.refine(&grams.total_gram, grams.total_rows);
     let mut modes_fz = refined.clone();
     modes_fz.sort_by(|a, b| a.0.total_cmp(&b.0));
 
-    // 3. Amplitudes of every window and the gains.
-    let mut poles: Vec<Complex<f64>> = modes_fz.iter().map(|&(f, z)| pole(f, z)).collect();
-    let fits: Vec<Option<WindowFit>> = slices
-        .iter()
-        .map(|w| fit_amplitudes(w, &poles, fs))
-        .collect();
-    // Keep the modes that ring above the noise (or the strongest `--modes`).
-    let energy: Vec<f64> = (0..poles.len())
-        .map(|j| {
-            fits.iter()
-                .zip(&slices)
-                .filter_map(|(f, w)| f.as_ref().map(|c| (c[j], w.len())))
-                .map(|(c, len)| {
-                    // Energy of 2 Re(c z^n) over the window: 2 |c|^2 sum |z|^(2n).
-                    let decay = (2.0 * poles[j].re / fs).exp();
-                    2.0 * c.norm_sqr() * (1.0 - decay.powi(len as i32)) / (1.0 - decay).max(1e-12)
-                })
-                .sum()
-        })
-        .collect();
-    let n_fits = fits.iter().filter(|f| f.is_some()).count().max(1) as f64;
-    let mut keep: Vec<usize> = (0..poles.len()).collect();
-    keep.sort_by(|&a, &b| energy[b].total_cmp(&energy[a]));
-    keep.retain(|&j| energy[j] > 20.0 * noise_rms * noise_rms * n_fits);
-    if let Some(n) = opts.modes {
-        keep.truncate(n);
-    }
-    keep.sort_by(|&a, &b| modes_fz[a].0.total_cmp(&modes_fz[b].0));
-    if keep.is_empty() {
-        return Err(IdentifyError::NotEnough(
-            "no mode rings above the noise in the gaps between pulses".to_string(),
-        ));
-    }
-    modes_fz = keep.iter().map(|&j| modes_fz[j]).collect();
-    poles = modes_fz.iter().map(|&(f, z)| pole(f, z)).collect();
+    // 3. Amplitudes of every window, and the modes that ring above the noise.
+    let modes_fz = ringing_modes(&slices, &modes_fz, noise_rms, opts.modes, fs)?;
+    let poles: Vec<Complex<f64>> = modes_fz.iter().map(|&(f, z)| pole(f, z)).collect();
     let fits: Vec<Option<WindowFit>> = slices
         .iter()
         .map(|w| fit_amplitudes(w, &poles, fs))
         .collect();
 
-    // 4. The accelerometer. The gains need not know it: the beam-inverted pulse below is the
-    // rigid signal already filtered by it, `A U`, and the ring-down it leaves is that of
-    // `H_b (A U)`.
+    // 4. The accelerometer, then the gains. The gains need not know the accelerometer: the
+    // beam-inverted pulse is the rigid signal already filtered by it, `A U`, and the
+    // ring-down it leaves is that of `H_b (A U)`.
     let accel = if opts.accelerometer {
         // Every mode the pencil saw, reported or not (`--modes`), rings on after the pulses.
         let seen: Vec<f64> = refined.iter().map(|m| m.0).collect();
@@ -827,105 +998,27 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
         None
     };
     let steps: Vec<ModeStep> = modes_fz.iter().map(|&(f, z)| mode_step(f, z, fs)).collect();
-    let mut gains = vec![0.0; poles.len()];
-    // Per pulse: (group, K_j, Delta c_j) of the last iteration.
-    let mut per_pulse: Vec<PulseResidues> = Vec::new();
-    for _ in 0..GAIN_ITERATIONS {
-        per_pulse.clear();
-        for (k, p) in pulses.iter().enumerate() {
-            let (Some(cb), Some(ca)) = (&fits[k], &fits[k + 1]) else {
-                continue;
-            };
-            let (wb, wa) = (windows[k].0, windows[k + 1].0);
-            let n0 = p.first.saturating_sub(BEFORE_PULSE);
-            let n1 = windows[k + 1].0;
-            if n1 <= n0 || n1 > y.len() {
-                continue;
-            }
-            let pulse: Vec<f64> = (n0..n1)
-                .map(|n| y[n] - ring_at(cb, &poles, fs, n as f64 - wb as f64))
-                .collect();
-            let u = invert_beam(&pulse, &steps, &gains);
-            let mut kk = Vec::with_capacity(poles.len());
-            let mut dc = Vec::with_capacity(poles.len());
-            for (j, pj) in poles.iter().enumerate() {
-                let uk: Complex<f64> = u
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &v)| (-pj * (i as f64 / fs)).exp() * v)
-                    .sum::<Complex<f64>>()
-                    / fs;
-                let kj = pj * pj * uk / (pj - pj.conj());
-                let before = cb[j] * (pj * ((n0 as f64 - wb as f64) / fs)).exp();
-                let after = ca[j] * (pj * ((n0 as f64 - wa as f64) / fs)).exp();
-                kk.push(kj);
-                dc.push(after - before);
-            }
-            per_pulse.push((k % GROUPS, kk, dc));
-        }
-        if per_pulse.is_empty() {
-            return Err(IdentifyError::NotEnough(
-                "no pulse has free ring-down on both sides".to_string(),
-            ));
-        }
-        for (j, g) in gains.iter_mut().enumerate() {
-            let (num, den) = per_pulse.iter().fold((0.0, 0.0), |(n, d), (_, kk, dc)| {
-                (n + (kk[j].conj() * dc[j]).re, d + kk[j].norm_sqr())
-            });
-            *g = if den > 0.0 { num / den } else { 0.0 };
-        }
-    }
+    let rings = Rings {
+        y: &y,
+        pulses: &pulses,
+        windows: &windows,
+        fits: &fits,
+        poles: &poles,
+        fs,
+    };
+    let (gains, per_pulse) = rings.gains(&steps)?;
 
     // 5. Jackknife.
-    let mut modes = Vec::with_capacity(poles.len());
-    let loo_modes: Vec<Vec<(f64, f64)>> = (0..GROUPS)
-        .map(|g| {
-            let gram = &total_gram - &group_gram[g];
-            refine(&gram, total_rows - group_rows[g])
-        })
-        .collect();
-    for (j, &(f, z)) in modes_fz.iter().enumerate() {
-        let (mut fj, mut zj, mut gj) = (Vec::new(), Vec::new(), Vec::new());
-        for (g, lm) in loo_modes.iter().enumerate() {
-            if let Some((fl, zl)) = nearest(lm, f) {
-                fj.push(fl);
-                zj.push(zl);
-            }
-            let (num, den) = per_pulse
-                .iter()
-                .filter(|(grp, _, _)| *grp != g)
-                .fold((0.0, 0.0), |(n, d), (_, kk, dc)| {
-                    (n + (kk[j].conj() * dc[j]).re, d + kk[j].norm_sqr())
-                });
-            if den > 0.0 {
-                gj.push(num / den);
-            }
-        }
-        modes.push(ModeEstimate {
-            frequency_hz: Estimate {
-                value: f,
-                std_error: jackknife(&fj),
-            },
-            damping_ratio: Estimate {
-                value: z,
-                std_error: jackknife(&zj),
-            },
-            gain: Estimate {
-                value: gains[j],
-                std_error: jackknife(&gj),
-            },
-        });
-    }
     Ok(Identification {
         sample_rate_hz: fs,
         noise_rms_counts: noise_rms,
         noise_estimated: opts.noise_rms_counts.is_none(),
         pulses: pulses.len(),
-        windows: used,
+        windows: grams.used,
         gain_pulses: per_pulse.len(),
-        lag,
+        lag: grams.lag,
         modes_asked: opts.modes,
-        modes,
+        modes: jackknifed_modes(&grams, &modes_fz, &gains, &per_pulse),
         accelerometer: accel,
         accelerometer_asked: opts.accelerometer,
     })
