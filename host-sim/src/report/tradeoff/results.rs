@@ -40,7 +40,8 @@ pub struct BackendRow {
     pub backend: &'static str,
     /// Host ns per quiet sample through `Monitor::feed`.
     pub quiet_ns: f64,
-    /// Host ns per quiet sample through `Monitor::feed_slice` ([`BLOCK_SAMPLES`] a call).
+    /// Host ns per quiet sample through `Monitor::feed_slice`
+    /// ([`BLOCK_SAMPLES`](crate::report::tradeoff::config::BLOCK_SAMPLES) a call).
     pub quiet_block_ns: f64,
     /// Host ns per classified pulse beyond the quiet cost of its samples:
     /// `(T_stream - N_samples t_quiet) / pulses`.
@@ -160,7 +161,7 @@ pub struct RateRow {
     /// Pulses per second of that stream.
     pub pulses_per_s: f64,
     /// Estimated Cortex-M4F instructions per second of signal
-    /// ([`m4_instructions_per_second`]).
+    /// ([`m4_instructions_per_second`](crate::report::tradeoff::firmware::m4_instructions_per_second)).
     pub m4_insns_per_signal_s: f64,
 }
 
