@@ -39,7 +39,7 @@
 //! `f32` must lie within its bounds ([`KERNEL_RANGE`]: a non-zero size from 1e-30 to 1e30),
 //! and so must each class's Hertz closed forms at the corners of its ranges. [`SceneFile::paper`] and [`SceneFile::paper_narrow`] are the
 //! built-in scenes, equal to `scenes/paper.toml` and `scenes/paper_narrow.toml` and, once
-//! converted (by the `bridge::convert` layer above), to the kernel's `Scene::paper()` and `Scene::paper_narrow()`.
+//! converted (`bridge::convert`), to the kernel's `Scene::paper()` and `Scene::paper_narrow()`.
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -27,8 +27,8 @@ pub struct ImpactSpec {
     /// Tolerance on the scaled state (used by [`Method::Dopri5`]).
     pub tolerance: Tolerance,
     /// Gravitational acceleration in m/s^2 pushing the sphere into the plate during the
-    /// contact (`>= 0`; 0: none, [`crate::physics::hertz64::STANDARD_GRAVITY_M_S2`] = 9.80665 for standard
-    /// gravity).
+    /// contact (`>= 0`; 0: none, [`crate::physics::hertz64::STANDARD_GRAVITY_M_S2`] = 9.80665 for
+    /// standard gravity).
     /// Standard gravity changes `F_max` by up to about 2e-3 relative on the paper's grid.
     pub gravity_m_s2: f64,
     /// Sample interval in s of the recorded force-time series, or `None` for no series.

@@ -592,8 +592,8 @@ const RESTART_THETA: f64 = 1e-9;
 
 /// Searches an accepted step for the earliest event, on every sign change of `x` (contact
 /// end), of `x - x_d` (Adams kink) and of the clamp's switching function (while
-/// `clamp_budget > 0`), see [`crate::physics::events`]. The clamp is searched only up to the earlier of
-/// the end and the kink.
+/// `clamp_budget > 0`), see [`crate::physics::events`]. The clamp is searched only up to the
+/// earlier of the end and the kink.
 fn find_event(
     seg: &Segment,
     x_kink: Option<f64>,

@@ -180,8 +180,8 @@ pub enum LawSpec {
     },
     /// Thornton's elastic-perfectly-plastic contact with limiting contact pressure
     /// `yield_pressure_pa` (Pa), optionally times the hysteresis damping
-    /// `(1 + chi delta_dot / u)` of a restitution model (see [`crate::physics::thornton`]). Needs the
-    /// scene's `E*` and `R` (a [`HertzImpact64::new`]).
+    /// `(1 + chi delta_dot / u)` of a restitution model (see [`crate::physics::thornton`]). Needs
+    /// the scene's `E*` and `R` (a [`HertzImpact64::new`]).
     Thornton {
         /// Limiting contact pressure `p_y` in Pa.
         yield_pressure_pa: f64,

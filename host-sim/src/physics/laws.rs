@@ -148,8 +148,8 @@ pub enum ForceLaw {
         /// `beta = ln e / sqrt(ln^2 e + pi^2)` (dimensionless).
         beta: f64,
     },
-    /// Thornton's elastic-perfectly-plastic contact (see [`crate::physics::thornton`]): Hertz up to the
-    /// limiting contact pressure, then linear plastic loading, elastic unloading from the
+    /// Thornton's elastic-perfectly-plastic contact (see [`crate::physics::thornton`]): Hertz up
+    /// to the limiting contact pressure, then linear plastic loading, elastic unloading from the
     /// enlarged radius `R_p`; times `(1 + chi delta_dot / u)` and clamped at zero. History
     /// dependent: the integrator replaces the law by [`ForceLaw::turned_at`] where the
     /// penetration turns, and ends the contact at the residual penetration

@@ -161,7 +161,7 @@ pub struct RateRow {
     /// Pulses per second of that stream.
     pub pulses_per_s: f64,
     /// Estimated Cortex-M4F instructions per second of signal
-    /// ([`m4_instructions_per_second`](crate::report::tradeoff::firmware::m4_instructions_per_second)).
+    /// ([`m4_instructions_per_second`](super::firmware::m4_instructions_per_second)).
     pub m4_insns_per_signal_s: f64,
 }
 
