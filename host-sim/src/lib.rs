@@ -32,6 +32,6 @@ pub use physics::{
 pub use report::{export, impact_row, paper, plasticity, speed, tradeoff};
 pub use score::{
     bayes, caving, counts, crb, cusum, evaluate, mismatch, reference, reliability, replay,
-    saturation, yield_bayes,
+    saturation, study_error, yield_bayes,
 };
 pub use sim::{generate, identify, par, sensor, stream, stream_file};

@@ -13,4 +13,5 @@ pub mod reference;
 pub mod reliability;
 pub mod replay;
 pub mod saturation;
+pub mod study_error;
 pub mod yield_bayes;

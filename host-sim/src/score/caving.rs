@@ -55,15 +55,16 @@ use coalshock::math::Backend;
 use coalshock::scene::{DEFAULT_CLASSES, MAX_CLASSES};
 use coalshock::{Event, Monitor, Scene, Verdict};
 
-use crate::bridge::convert::{ConvertError, scene_to_kernel_in};
-use crate::scene::{SceneError, SceneFile, SpeedSpec};
+use crate::bridge::convert::scene_to_kernel_in;
+use crate::scene::{SceneFile, SpeedSpec};
 use crate::score::bayes::ClassModel;
 use crate::score::cusum::{Cusum, MixtureModel, NaiveRule, increment, label_increment, median_p90};
 use crate::score::evaluate::class_models;
 use crate::score::replay::replay_events;
+use crate::score::study_error::StudyError;
 use crate::sim::generate::{PlannedImpact, generate_planned};
 use crate::sim::par::map_ordered;
-use crate::sim::stream::{StreamError, StreamOptions};
+use crate::sim::stream::StreamOptions;
 
 /// False-alarm settings of the delay-against-false-alarm curve (alarms per impact).
 pub const CURVE_RATES: [f64; 6] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
@@ -71,33 +72,11 @@ pub const CURVE_RATES: [f64; 6] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
 /// Draws of the exact mixture behind the reference's KL divergence.
 const KL_DRAWS: usize = 200_000;
 
-/// Why caving rounds could not run.
-#[derive(Debug, thiserror::Error)]
-pub enum CavingError {
-    /// The scene is invalid.
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    /// The kernel refused the scene.
-    #[error(transparent)]
-    Convert(#[from] ConvertError),
-    /// A round's stream could not be simulated.
-    #[error(transparent)]
-    Stream(#[from] StreamError),
-    /// An option is out of range.
-    #[error("caving option {field} {problem}")]
-    Option {
-        /// The option.
-        field: &'static str,
-        /// What is wrong with it.
-        problem: String,
-    },
-}
+/// Why caving rounds could not run: the scoring studies' one error.
+pub type CavingError = StudyError;
 
 fn opt_err(field: &'static str, problem: impl Into<String>) -> CavingError {
-    CavingError::Option {
-        field,
-        problem: problem.into(),
-    }
+    StudyError::option("caving", field, problem)
 }
 
 /// How the gangue share rises when the boundary arrives.

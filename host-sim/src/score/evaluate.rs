@@ -92,19 +92,20 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use crate::bridge::convert::{
-    ConvertError, measurement_from_kernel, scene_to_kernel_in, separability_from_kernel,
+    measurement_from_kernel, scene_to_kernel_in, separability_from_kernel,
 };
 use crate::physics::hertz64::HertzImpact64;
-use crate::scene::{SceneError, SceneFile};
+use crate::scene::SceneFile;
 pub use crate::score::bayes::class_models;
 use crate::score::bayes::{Accuracy, ClassModel, FeatureNoise, bayes_accuracy, decide};
 use crate::score::mismatch::ChainMismatch;
-use crate::score::reference::{ReferenceError, ReferenceLimit, ReferenceOptions, reference_limit};
+use crate::score::reference::{ReferenceLimit, ReferenceOptions, reference_limit};
 use crate::score::reliability::{Reliability, reliability};
 use crate::score::replay::{match_truth, replay_events};
+use crate::score::study_error::StudyError;
 use crate::sim::generate::generate_class;
 use crate::sim::par::map_ordered;
-use crate::sim::stream::{StreamError, StreamOptions};
+use crate::sim::stream::StreamOptions;
 
 /// Default impacts per simulated stream.
 pub const DEFAULT_IMPACTS_PER_STREAM: usize = 250;
@@ -163,30 +164,8 @@ impl Default for EvalOptions {
     }
 }
 
-/// Why an evaluation could not run.
-#[derive(Debug, thiserror::Error)]
-pub enum EvalError {
-    /// The scene file is invalid.
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    /// The kernel refused the scene.
-    #[error(transparent)]
-    Convert(#[from] ConvertError),
-    /// A stream could not be simulated.
-    #[error(transparent)]
-    Stream(#[from] StreamError),
-    /// The reference limit could not be computed.
-    #[error(transparent)]
-    Reference(#[from] ReferenceError),
-    /// An option is out of range.
-    #[error("evaluation option {field} {problem}")]
-    Option {
-        /// The option.
-        field: &'static str,
-        /// What is wrong with it.
-        problem: String,
-    },
-}
+/// Why an evaluation could not run: the scoring studies' one error.
+pub type EvalError = StudyError;
 
 /// Counts of one true class.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -576,10 +555,7 @@ struct MeasuredLn {
 }
 
 fn option_err(field: &'static str, problem: impl Into<String>) -> EvalError {
-    EvalError::Option {
-        field,
-        problem: problem.into(),
-    }
+    StudyError::option("evaluation", field, problem)
 }
 
 /// SplitMix64 finaliser: a well-mixed 64-bit value of `x`.
