@@ -198,3 +198,21 @@ fn too_few_pulses_and_bad_options_are_errors() {
     let e = identify(&quiet, &bad).expect_err("bad rate");
     assert!(e.to_string().starts_with("--sample-rate"), "{e}");
 }
+
+/// A stream that ends inside a pulse (its last free window would start past the data) is
+/// identified from the windows before it, not a panic.
+#[test]
+fn a_stream_ending_inside_a_pulse_is_identified() {
+    let scene = common::shipped_scene("piezo_chain.toml");
+    let mut options = StreamOptions::default();
+    options.faults.end_mid_pulse = true;
+    let stream = generate(&scene, 60, 4, &options).expect("stream");
+    let opts = IdentifyOptions {
+        sample_rate_hz: scene.sensor.sample_rate_hz,
+        modes: None,
+        accelerometer: true,
+        noise_rms_counts: None,
+    };
+    let id = identify(&stream.samples, &opts).expect("identified");
+    assert_eq!(id.modes.len(), scene.sensor.beam_modes.len(), "{id:?}");
+}

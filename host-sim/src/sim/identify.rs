@@ -694,7 +694,11 @@ fn free_windows(pulses: &[PulseSpan], len: usize) -> Vec<(usize, usize)> {
     starts
         .iter()
         .zip(&ends)
-        .map(|(s, e)| (*s, (*e).max(*s).min(len)))
+        .map(|(s, e)| {
+            // A stream may end inside a pulse: its window then starts past the data.
+            let s = (*s).min(len);
+            (s, (*e).max(s).min(len))
+        })
         .collect()
 }
 
