@@ -5,10 +5,9 @@
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::sim::generate::Clock;
 use crate::sim::sensor::{ForcePulse, Sensor};
 use crate::sim::stream::{
-    FaultEvent, FaultKind, FaultOptions, Gap, ImpactFault, QUIET_MARGIN_SAMPLES, Truth,
+    Clock, FaultEvent, FaultKind, FaultOptions, Gap, ImpactFault, QUIET_MARGIN_SAMPLES, Truth,
 };
 
 /// Phase 3: one draw per impact, whatever the shares. The last impact is truncated when the

@@ -19,7 +19,8 @@ use crate::sim::faults::{QuietFaults, busy_spans, fault_impacts, remove_dropped}
 use crate::sim::par::map_ordered;
 use crate::sim::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
 use crate::sim::stream::{
-    ImpactFault, MAX_STREAM_SAMPLES, PulseModel, Stream, StreamError, StreamOptions, Truth, opt_err,
+    Clock, ImpactFault, MAX_STREAM_SAMPLES, PulseModel, Stream, StreamError, StreamOptions, Truth,
+    opt_err,
 };
 
 /// ChaCha8 stream of the impacts and their timing.
@@ -171,23 +172,6 @@ enum Source<'a> {
     Drawn(Option<usize>),
     /// Given impact by impact.
     Plan(&'a [PlannedImpact]),
-}
-
-/// The sample clock of a stream: `t_n = phase_s + n / fs`.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Clock {
-    /// Sample rate in Hz.
-    pub(crate) fs: f64,
-    /// Time of sample 0 in s.
-    pub(crate) phase_s: f64,
-}
-
-impl Clock {
-    /// Samples of the time line from sample 0 up to time `t_s` (s), unrounded:
-    /// `(t_s - phase_s) fs`.
-    pub(crate) fn samples_to(&self, t_s: f64) -> f64 {
-        (t_s - self.phase_s) * self.fs
-    }
 }
 
 /// The stream of `n_impacts` impacts from `source`, in seven phases: impacts and timing, force

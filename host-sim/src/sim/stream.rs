@@ -390,3 +390,20 @@ pub struct Stream {
     /// Spikes and stuck runs, by time.
     pub events: Vec<FaultEvent>,
 }
+
+/// The sample clock of a stream: `t_n = phase_s + n / fs`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Clock {
+    /// Sample rate in Hz.
+    pub(crate) fs: f64,
+    /// Time of sample 0 in s.
+    pub(crate) phase_s: f64,
+}
+
+impl Clock {
+    /// Samples of the time line from sample 0 up to time `t_s` (s), unrounded:
+    /// `(t_s - phase_s) fs`.
+    pub(crate) fn samples_to(&self, t_s: f64) -> f64 {
+        (t_s - self.phase_s) * self.fs
+    }
+}
