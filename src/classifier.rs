@@ -198,9 +198,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             .zip(class_lls.iter_mut())
             .enumerate()
         {
-            // A yielding class carries the noise through its own map, at the pulse's point.
+            // A bent class carries the noise through its own map, at the pulse's point.
             let (noise, wide) = env
-                .yield_noise::<M>((lf, lt), (sf, st), bias)
+                .bent_noise::<M>((lf, lt), (sf, st), bias)
                 .unwrap_or((noise, wide));
             let d = env.outside_sigmas_squared(lf, lt, wide);
             if d < nearest_d {

@@ -8,9 +8,10 @@
 //! the `(R, u)` the class would need:
 //! `y = (ln F - ln c_F - 2 (ln t - ln c_t)) / (8/5)`, `x = ln t - ln c_t + y/5`.
 //!
-//! A class whose contact yields bends the parallelogram by Thornton's ratios to the Hertz
-//! impact, functions of `ln u` alone ([`crate::yield_map`]): the same inverse with a table
-//! lookup for `y`, and the map's local Jacobian in place of `8/5`.
+//! A class whose pulses are not Hertz's bends the parallelogram by its measured/Hertz ratios,
+//! functions of one direction `s = a ln R + b ln u` of its plane ([`crate::ratio_map`]:
+//! Thornton's yield along `ln u`, a fixed-coefficient damped law along its damping ratio): the
+//! same inverse with a table lookup for `s`, and the map's local Jacobian in place of `8/5`.
 //!
 //! Priors: `R` log-uniform on `[R0, R1]`; `u` with density `p(u) ~ u^(beta - 1)` on `[u0, u1]`
 //! (`beta = 1`: uniform speed; `beta = 2`: uniform drop height, `u = sqrt(2 g h)`).
@@ -20,7 +21,7 @@ use crate::hertz::CONTACT_TIME_FACTOR;
 use crate::math::{self, Backend};
 #[cfg(feature = "plasticity")]
 use crate::thornton::yield_speed_in;
-use crate::yield_map::{Local, YieldMap};
+use crate::ratio_map::{Local, RatioMap};
 
 /// `|det|` of the map `(ln R, ln u) -> (ln F_max, ln t_c)`.
 pub const JACOBIAN: f32 = 1.6;
@@ -89,14 +90,14 @@ pub struct Envelope {
     pub speed_beta: f32,
     /// `ln` of the constant part of the prior density in `(ln F, ln t)`:
     /// `-ln(x1 - x0) - ln(8/5) + ln(beta / (e^(beta y1) (1 - e^(beta (y0 - y1)))))`
-    /// (`-ln(y1 - y0)` in place of the last term for `beta = 0`); for a yielding class the
-    /// density adds `ln(8/5 / h'(y))` at the point ([`Envelope::ln_density_excess`]).
+    /// (`-ln(y1 - y0)` in place of the last term for `beta = 0`); for a bent class the
+    /// density adds `ln(8/5 / J)` at the point ([`Envelope::ln_density_excess`]).
     pub ln_normalizer: f32,
-    /// The yield map that bends the envelope, for a class whose contact yields; `None`: the
-    /// Hertz parallelogram. Only with the `plasticity` feature (without it every envelope is
-    /// Hertz's and carries no table).
-    #[cfg(feature = "plasticity")]
-    pub yield_map: Option<YieldMap>,
+    /// The ratio map that bends the envelope (Thornton's yield, or a table of a damped law's
+    /// ratios); `None`: the Hertz parallelogram. Only with the `ratio_map` feature (without it
+    /// every envelope is Hertz's and carries no table).
+    #[cfg(feature = "ratio_map")]
+    pub ratio_map: Option<RatioMap>,
 }
 
 /// Measurement noise carried from `(ln F_max, ln t_c)` into `(x, y) = (ln R, ln u)` as
@@ -141,31 +142,31 @@ impl NoiseXy {
 }
 
 impl NoiseXy {
-    /// From the standard deviations of `ln F_max` and `ln t_c` through a yielding class's map
-    /// at a point with slopes `l` ([`Local`]): with `j = h'(y)`, `g = 1/5 - phi_t'(y)`,
-    /// `dy = (d ln F - 2 d ln t) / j` and `dx = (g / j) d ln F + (1 - 2 g / j) d ln t`, so
-    /// `sigma_y^2 = (sF^2 + 4 sT^2) / j^2`, `sigma_x^2 = (g/j)^2 sF^2 + (1 - 2g/j)^2 sT^2`
-    /// ([`NoiseXy::new`] for `j = 8/5`, `g = 1/5`).
+    /// From the standard deviations of `ln F_max` and `ln t_c` through a bent class's map
+    /// at a point with slopes `l` ([`Local`]): `dx = dx_A d ln F + dx_B d ln t` (likewise `y`),
+    /// so `sigma_x^2 = dx_A^2 sF^2 + dx_B^2 sT^2`, `sigma_y^2 = dy_A^2 sF^2 + dy_B^2 sT^2`
+    /// ([`NoiseXy::new`] for Hertz's `(1/8, 3/4)`, `(5/8, -5/4)`).
     pub fn through<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32, l: Local) -> Self {
-        let (j, g) = (l.jacobian, 0.2 - l.phi_t_slope);
-        let (cf, ct) = (g / j, 1.0 - 2.0 * g / j);
         let f2 = sigma_ln_force * sigma_ln_force;
         let t2 = sigma_ln_duration * sigma_ln_duration;
+        let var = |(ca, cb): (f32, f32)| ca * ca * f2 + cb * cb * t2;
         Self {
-            sigma_x: clamp_sigma(M::sqrt(cf * cf * f2 + ct * ct * t2)),
-            sigma_y: clamp_sigma(M::sqrt((f2 + 4.0 * t2) / (j * j))),
+            sigma_x: clamp_sigma(M::sqrt(var(l.dx))),
+            sigma_y: clamp_sigma(M::sqrt(var(l.dy))),
         }
     }
 
-    /// [`NoiseXy::with_chain_bias`] through a yielding class's map: the bias `(b, -b)` of
-    /// `(ln F_max, ln t_c)` moves `(ln R, ln u)` by `((3 g / j - 1) b, 3 b / j)`
+    /// [`NoiseXy::with_chain_bias`] through a bent class's map: the bias `(b, -b)` of
+    /// `(ln F_max, ln t_c)` moves `(ln R, ln u)` by `((dx_A - dx_B) b, (dy_A - dy_B) b)`
     /// (`(-5/8 b, 15/8 b)` for Hertz).
     pub fn with_bias_through<M: Backend>(self, bias_ln_force: f32, l: Local) -> Self {
         if bias_ln_force <= 0.0 || !bias_ln_force.is_finite() {
             return self;
         }
-        let (j, g) = (l.jacobian, 0.2 - l.phi_t_slope);
-        let (bx, by) = ((3.0 * g / j - 1.0) * bias_ln_force, 3.0 * bias_ln_force / j);
+        let (bx, by) = (
+            (l.dx.0 - l.dx.1) * bias_ln_force,
+            (l.dy.0 - l.dy.1) * bias_ln_force,
+        );
         Self {
             sigma_x: clamp_sigma(M::sqrt(self.sigma_x * self.sigma_x + bx * bx)),
             sigma_y: clamp_sigma(M::sqrt(self.sigma_y * self.sigma_y + by * by)),
@@ -232,8 +233,8 @@ impl Envelope {
             ln_speed: (y0, y1),
             speed_beta,
             ln_normalizer: -M::ln(x1 - x0) - M::ln(JACOBIAN) + ln_py,
-            #[cfg(feature = "plasticity")]
-            yield_map: None,
+            #[cfg(feature = "ratio_map")]
+            ratio_map: None,
         };
         if !env.ln_normalizer.is_finite() {
             return Err(Error::Unrepresentable("prior density"));
@@ -249,18 +250,25 @@ impl Envelope {
 
     /// The envelope bent by Thornton's yield at the limiting contact pressure
     /// `yield_pressure_pa` (Pa), for the same material (`effective_modulus_pa`,
-    /// `density_kg_m3`) as [`Envelope::new`]: its [`YieldMap`] over the class's speed range
-    /// from the yield speed `V_y = 1.5605 (p_y^5 / (E*^4 rho))^(1/2)`.
+    /// `density_kg_m3`) as [`Envelope::new`]: its [`RatioMap::thornton`] over the class's
+    /// speed range from the yield speed `V_y = 1.5605 (p_y^5 / (E*^4 rho))^(1/2)`.
     #[cfg(feature = "plasticity")]
     #[inline(never)]
     pub fn yielding<M: Backend>(
-        mut self,
+        self,
         effective_modulus_pa: f32,
         density_kg_m3: f32,
         yield_pressure_pa: f32,
     ) -> Result<Self, Error> {
         let v_y = yield_speed_in::<M>(effective_modulus_pa, density_kg_m3, yield_pressure_pa)?;
-        self.yield_map = Some(YieldMap::new::<M>(v_y, self.ln_speed)?);
+        self.bent_by(RatioMap::thornton::<M>(v_y, self.ln_speed)?)
+    }
+
+    /// The envelope bent by the ratio map `map` ([`crate::ratio_map`]), checked at its corners.
+    #[cfg(feature = "ratio_map")]
+    #[inline(never)]
+    pub fn bent_by(mut self, map: RatioMap) -> Result<Self, Error> {
+        self.ratio_map = Some(map);
         // Every corner must give a peak force and duration that f32 carries, checked in log
         // space (`ln 1e-30 ..= ln 1e30`), so that no backend's `exp` is needed here.
         let (lo, hi) = (-69.077_55_f32, 69.077_55_f32);
@@ -276,52 +284,54 @@ impl Envelope {
         Ok(self)
     }
 
-    /// The yield map, if the class yields and the kernel is built with the `plasticity`
-    /// feature (without it the bent paths compile away: a firmware whose scenes do not yield
+    /// The ratio map, if the class has one and the kernel is built with the `ratio_map`
+    /// feature (without it the bent paths compile away: a firmware whose scenes need no table
     /// carries none of them).
     #[inline(always)]
-    fn bent(&self) -> Option<&YieldMap> {
-        #[cfg(feature = "plasticity")]
-        return self.yield_map.as_ref();
-        #[cfg(not(feature = "plasticity"))]
+    fn bent(&self) -> Option<&RatioMap> {
+        #[cfg(feature = "ratio_map")]
+        return self.ratio_map.as_ref();
+        #[cfg(not(feature = "ratio_map"))]
         None
     }
 
-    /// The yield map's values and slopes at `y = ln u`, or `None` for a Hertz envelope.
-    pub fn local(&self, y: f32) -> Option<Local> {
-        self.bent().map(|m| m.local(y))
+    /// The ratio map's values and slopes at `(x, y) = (ln R, ln u)`, or `None` for a Hertz
+    /// envelope.
+    pub fn local(&self, x: f32, y: f32) -> Option<Local> {
+        self.bent().map(|m| m.local(m.s(x, y)))
     }
 
-    /// `ln(8/5 / h'(y))`: what a yielding class's density at `y = ln u` adds to
+    /// `ln(8/5 / J)`: what a bent class's density at `(x, y) = (ln R, ln u)` adds to
     /// [`Envelope::ln_normalizer`] (0 for a Hertz envelope).
-    pub fn ln_density_excess<M: Backend>(&self, y: f32) -> f32 {
+    pub fn ln_density_excess<M: Backend>(&self, x: f32, y: f32) -> f32 {
         match self.bent() {
-            Some(map) => ln_excess::<M>(map, y),
+            Some(map) => ln_excess::<M>(map, x, y),
             None => 0.0,
         }
     }
 
-    /// The measurement noise `(sigma_ln_force, sigma_ln_duration)` carried into this yielding
+    /// The measurement noise `(sigma_ln_force, sigma_ln_duration)` carried into this bent
     /// class's `(ln R, ln u)` at the point `(ln_force, ln_duration)` maps to, and the same
     /// widened by a chain's bias `bias_ln_force` ([`NoiseXy::through`],
     /// [`NoiseXy::with_bias_through`]); `None` for a Hertz envelope (the caller's
     /// [`NoiseXy::new`] holds).
     #[inline(never)]
-    pub fn yield_noise<M: Backend>(
+    pub fn bent_noise<M: Backend>(
         &self,
         (ln_force, ln_duration): (f32, f32),
         (sigma_ln_force, sigma_ln_duration): (f32, f32),
         bias_ln_force: f32,
     ) -> Option<(NoiseXy, NoiseXy)> {
         let map = self.bent()?;
-        let (_, y) = self.invert_ln(ln_force, ln_duration);
-        let l = map.local(y);
+        let a = ln_force - self.ln_force_coeff;
+        let b = ln_duration - self.ln_duration_coeff;
+        let l = map.local(map.invert(a, b).2);
         let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, l);
         Some((noise, noise.with_bias_through::<M>(bias_ln_force, l)))
     }
 
-    /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s; for a yielding class
-    /// `ln t_c = ln c_t + x - y/5 + phi_t(y)`, `ln F_max = ln c_F - 2 ln c_t + 2 ln t_c + h(y)`.
+    /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s; a bent class adds
+    /// `(phi_F(s), phi_t(s))` at `s = a x + b y`.
     pub fn forward(&self, x: f32, y: f32) -> (f32, f32) {
         if let Some(map) = self.bent() {
             return self.forward_bent(map, x, y);
@@ -333,8 +343,7 @@ impl Envelope {
     }
 
     /// `(ln R, ln u)` that gives `(ln F_max, ln t_c)` (the exact inverse of [`Self::forward`]).
-    /// For a yielding class `y` solves `h(y) = a - 2 b` on the map and
-    /// `x = b + y/5 - phi_t(y)`.
+    /// For a bent class `s` solves `h(s) = p A + q B` on the map ([`RatioMap::invert`]).
     pub fn invert_ln(&self, ln_force: f32, ln_duration: f32) -> (f32, f32) {
         if let Some(map) = self.bent() {
             return self.invert_bent(map, ln_force, ln_duration);
@@ -345,23 +354,25 @@ impl Envelope {
         (b + 0.2 * y, y)
     }
 
-    /// [`Envelope::forward`] of a yielding class (out of line: a scene without yield carries
+    /// [`Envelope::forward`] of a bent class (out of line: a scene without tables carries
     /// one copy, not one per caller).
     #[inline(never)]
-    fn forward_bent(&self, map: &YieldMap, x: f32, y: f32) -> (f32, f32) {
-        let l = map.local(y);
-        let lt = self.ln_duration_coeff + x - 0.2 * y + l.phi_t;
-        let lf = self.ln_force_coeff - 2.0 * self.ln_duration_coeff + 2.0 * lt + l.h;
-        (lf, lt)
+    fn forward_bent(&self, map: &RatioMap, x: f32, y: f32) -> (f32, f32) {
+        let (pf, pt) = map.forward(x, y);
+        (
+            self.ln_force_coeff + 2.0 * x + 1.2 * y + pf,
+            self.ln_duration_coeff + x - 0.2 * y + pt,
+        )
     }
 
-    /// [`Envelope::invert_ln`] of a yielding class (out of line, as [`Envelope::forward_bent`]).
+    /// [`Envelope::invert_ln`] of a bent class (out of line, as [`Envelope::forward_bent`]).
     #[inline(never)]
-    fn invert_bent(&self, map: &YieldMap, ln_force: f32, ln_duration: f32) -> (f32, f32) {
-        let a = ln_force - self.ln_force_coeff;
-        let b = ln_duration - self.ln_duration_coeff;
-        let y = map.ln_speed_for(a - 2.0 * b);
-        (b + 0.2 * y - map.local(y).phi_t, y)
+    fn invert_bent(&self, map: &RatioMap, ln_force: f32, ln_duration: f32) -> (f32, f32) {
+        let (x, y, _) = map.invert(
+            ln_force - self.ln_force_coeff,
+            ln_duration - self.ln_duration_coeff,
+        );
+        (x, y)
     }
 
     /// The radius and speed this class needs for a pulse of `peak_force_n` and `duration_s`,
@@ -398,15 +409,15 @@ impl Envelope {
     }
 
     /// Noiseless prior density of the class at `(ln F_max, ln t_c)`:
-    /// `p(x) p(y) / 1.6` with `p(x) = 1 / (x1 - x0)` inside the box, 0 outside (`/ h'(y)` for
-    /// a yielding class).
+    /// `p(x) p(y) / 1.6` with `p(x) = 1 / (x1 - x0)` inside the box, 0 outside (`/ J` for
+    /// a bent class).
     pub fn density<M: Backend>(&self, ln_force: f32, ln_duration: f32) -> f32 {
         let (x, y) = self.invert_ln(ln_force, ln_duration);
         let (x0, x1) = self.ln_radius;
         if !(x0..=x1).contains(&x) {
             return 0.0;
         }
-        let jacobian = self.local(y).map_or(JACOBIAN, |l| l.jacobian);
+        let jacobian = self.local(x, y).map_or(JACOBIAN, |l| l.jacobian);
         self.speed_density::<M>(y) / (x1 - x0) / jacobian
     }
 
@@ -417,8 +428,8 @@ impl Envelope {
     ///      * beta e^(beta (y - y1) + beta^2 sy^2 / 2) / (1 - e^(beta (y0 - y1)))
     ///      * [Phi((y1 - y - beta sy^2)/sy) - Phi((y0 - y - beta sy^2)/sy)]`
     ///
-    /// (the constant factors are [`Envelope::ln_normalizer`]; a yielding class has `h'(y)` in
-    /// place of 1.6, and its `noise` from [`Envelope::yield_noise`]). `-inf` when the
+    /// (the constant factors are [`Envelope::ln_normalizer`]; a bent class has its local
+    /// Jacobian in place of 1.6, and its `noise` from [`Envelope::bent_noise`]). `-inf` when the
     /// observation is so far outside that f32 rounds the likelihood to zero.
     pub fn ln_likelihood<M: Backend>(
         &self,
@@ -439,7 +450,7 @@ impl Envelope {
         }
         let ll = M::ln(ix * iy) + self.ln_normalizer + b * y + 0.5 * b * shift;
         if self.bent().is_some() {
-            ll + self.ln_density_excess::<M>(y)
+            ll + self.ln_density_excess::<M>(x, y)
         } else {
             ll
         }
@@ -456,10 +467,10 @@ impl Envelope {
     }
 }
 
-/// `ln(8/5 / h'(y))` of a yield map (out of line, as [`Envelope::forward_bent`]).
+/// `ln(8/5 / J)` of a ratio map at `(x, y)` (out of line, as [`Envelope::forward_bent`]).
 #[inline(never)]
-fn ln_excess<M: Backend>(map: &YieldMap, y: f32) -> f32 {
-    M::ln(JACOBIAN / map.local(y).jacobian)
+fn ln_excess<M: Backend>(map: &RatioMap, x: f32, y: f32) -> f32 {
+    M::ln(JACOBIAN / map.local(map.s(x, y)).jacobian)
 }
 
 /// `MIN_SIGMA` for NaN or tiny values, at most [`MAX_SIGMA`].

@@ -28,7 +28,7 @@ pub mod sampled;
 pub mod scene;
 pub mod shape_fit;
 pub mod thornton;
-pub mod yield_map;
+pub mod ratio_map;
 
 pub use chain_bias::ChainBias;
 pub use classifier::{Measurement, RejectReason, Verdict};

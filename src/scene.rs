@@ -55,8 +55,14 @@ pub struct ParticleClass {
     pub prior: f32,
     /// Limiting contact pressure `p_y` in Pa of Thornton's elastic-perfectly-plastic contact
     /// (finite, `> 0`), if the class's contact yields: its envelope is then bent by
-    /// [`crate::yield_map`]; `None`: elastic Hertz contact.
+    /// [`crate::ratio_map`]; `None`: elastic Hertz contact.
     pub yield_pressure_pa: Option<f32>,
+    /// The table of measured/Hertz ratios that bends the class's envelope when its contact's
+    /// ratios vary with size and speed (a damped law with a fixed coefficient, computed by the
+    /// host from its integrator; [`crate::ratio_map`]); `None`: the scene's single
+    /// [`ContactCalibration`] holds. With the `ratio_map` feature only.
+    #[cfg(feature = "ratio_map")]
+    pub ratio_map: Option<crate::ratio_map::RatioMap>,
 }
 
 impl ParticleClass {
@@ -75,6 +81,8 @@ impl ParticleClass {
             speed,
             prior: 1.0,
             yield_pressure_pa: None,
+            #[cfg(feature = "ratio_map")]
+            ratio_map: None,
         }
     }
 }
@@ -429,8 +437,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             let mut short =
                 hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
             let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
-            if let Some(p_y) = c.yield_pressure_pa {
-                env = bend::<M>(env, e_eff, rho, p_y)?;
+            #[cfg(feature = "ratio_map")]
+            let table = c.ratio_map;
+            #[cfg(not(feature = "ratio_map"))]
+            let table: Option<()> = None;
+            if c.yield_pressure_pa.is_some() || table.is_some() {
+                env = bend::<M>(env, c, e_eff, rho)?;
                 let (x0, x1) = env.ln_radius;
                 let (y0, y1) = env.ln_speed;
                 short = M::exp(env.forward(x0, y1).1);
@@ -606,7 +618,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             return (0.0, 0.0);
         };
         let (x0, x1) = env.ln_radius;
-        let own = *lp + env.ln_normalizer + env.speed_beta * y + env.ln_density_excess::<M>(y);
+        // A bent class's own density varies along the row; taken linear between its ends.
+        let own = *lp + env.ln_normalizer + env.speed_beta * y;
+        let (own_a, own_b) = (
+            own + env.ln_density_excess::<M>(x0, y),
+            own + env.ln_density_excess::<M>(x1, y),
+        );
         let fa = env.forward(x0, y);
         let fb = env.forward(x1, y);
         let mut possible = Intervals::<N>::EMPTY;
@@ -624,10 +641,13 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             };
             possible.push(lo, hi);
             // Ties go to the lower index, as the classifier's argmax does.
-            // A yielding class's density has `h'(y')` in place of 8/5 ([`Envelope::density`]).
-            let (ea, eb) = (e2.ln_density_excess::<M>(ya), e2.ln_density_excess::<M>(yb));
-            let c0 = *lp2 + e2.ln_normalizer + e2.speed_beta * ya + ea - own;
-            let c1 = e2.speed_beta * (yb - ya) + (eb - ea);
+            // A bent class's density has its Jacobian in place of 8/5 ([`Envelope::density`]).
+            let (ea, eb) = (
+                e2.ln_density_excess::<M>(xa, ya),
+                e2.ln_density_excess::<M>(xb, yb),
+            );
+            let c0 = *lp2 + e2.ln_normalizer + e2.speed_beta * ya + ea - own_a;
+            let c1 = e2.speed_beta * (yb - ya) + (eb - ea) - (own_b - own_a);
             if let Some((blo, bhi)) = beats(c0, c1, j < i, (lo, hi)) {
                 better.push(blo, bhi);
             }
@@ -687,19 +707,29 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     }
 }
 
-/// The envelope `env` of a class that yields at `p_y` Pa ([`Envelope::yielding`]; its
-/// material: effective modulus `e` Pa, density `rho` kg/m^3); without the `plasticity`
-/// feature such a class is refused.
-fn bend<M: Backend>(env: Envelope, e: f32, rho: f32, p_y: f32) -> Result<Envelope, Error> {
-    #[cfg(feature = "plasticity")]
-    return env.yielding::<M>(e, rho, positive(p_y, "yield_pressure_pa")?);
-    #[cfg(not(feature = "plasticity"))]
-    {
-        let _ = (env, e, rho, p_y, M::default());
-        Err(Error::OutOfRange(
-            "yield_pressure_pa (kernel built without the `plasticity` feature)",
-        ))
+/// The envelope `env` of class `c` bent by its ratio table, if it carries one
+/// ([`Envelope::bent_by`]), else by its yield at `c.yield_pressure_pa` Pa
+/// ([`Envelope::yielding`]; its material: effective modulus `e` Pa, density `rho` kg/m^3).
+/// Without the `ratio_map` feature a class with a table is refused, and without `plasticity`
+/// one that yields.
+fn bend<M: Backend>(
+    env: Envelope,
+    c: &ParticleClass,
+    e: f32,
+    rho: f32,
+) -> Result<Envelope, Error> {
+    #[cfg(feature = "ratio_map")]
+    if let Some(map) = c.ratio_map {
+        return env.bent_by(map);
     }
+    #[cfg(feature = "plasticity")]
+    if let Some(p_y) = c.yield_pressure_pa {
+        return env.yielding::<M>(e, rho, positive(p_y, "yield_pressure_pa")?);
+    }
+    let _ = (env, c, e, rho, M::default());
+    Err(Error::OutOfRange(
+        "yield_pressure_pa (kernel built without the `plasticity` feature)",
+    ))
 }
 
 /// Up to `N` intervals of `[0, 1]` (one per other class of a scene of `N` classes).

@@ -122,7 +122,7 @@ fn yield_pressure_is_checked_and_bends_the_envelope() {
     let elastic = build(None).unwrap();
     assert_eq!(elastic, Scene::paper().unwrap());
     let yielding = build(Some(30e6)).unwrap();
-    assert!(yielding.envelopes()[0].yield_map.is_some());
-    assert!(yielding.envelopes()[1].yield_map.is_none());
+    assert!(yielding.envelopes()[0].ratio_map.is_some());
+    assert!(yielding.envelopes()[1].ratio_map.is_none());
     assert!(yielding.duration_bounds_s().1 > 1.3 * elastic.duration_bounds_s().1);
 }

@@ -277,7 +277,7 @@ fn kernel_yield_envelope_follows_the_closed_forms() {
     let kernel = host_sim::convert::scene_to_kernel(&file).unwrap();
     let mut worst = (0.0f64, 0.0f64);
     for (c, env) in file.classes.iter().zip(kernel.envelopes()) {
-        assert!(env.yield_map.is_some(), "{}", c.name);
+        assert!(env.ratio_map.is_some(), "{}", c.name);
         let p_y = c.yield_pressure_pa.unwrap();
         for radius in [0.015, 0.021, 0.033, 0.04] {
             for speed in [1.0, 1.37, 2.2, 3.05, 4.6, 5.0] {

@@ -336,7 +336,7 @@ impl Measured for Yielding {
 /// its stream (its figures reported with the prefix `yield_`), then a logging pass (every
 /// line after the prefix `yield `), one `feed` per sample as for the paper stream. Also
 /// reports `yield_table_class_bytes`, the RAM a class's yield table adds to its envelope
-/// (`size_of::<Option<YieldMap>>()`), and whether every pulse was counted once. Returns
+/// (`size_of::<Option<RatioMap>>()`), and whether every pulse was counted once. Returns
 /// whether both passes gave the same counters, and the lowest stack address touched.
 #[cfg(feature = "plasticity")]
 #[inline(never)]
@@ -349,7 +349,7 @@ fn yield_pass(clock: &Clock) -> (bool, usize) {
     let measure = |key: &str, value: u64| defmt::println!("measure {=str} {=u64}", key, value);
     measure(
         "yield_table_class_bytes",
-        core::mem::size_of::<Option<coalshock::yield_map::YieldMap>>() as u64,
+        core::mem::size_of::<Option<coalshock::ratio_map::RatioMap>>() as u64,
     );
     measure("yield_counters_balanced", counters.balanced() as u64);
     (counters == f.counters, f.lowest.min(rt::lowest_touched()))
