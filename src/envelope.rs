@@ -19,9 +19,9 @@
 use crate::error::{Error, positive, representable};
 use crate::hertz::CONTACT_TIME_FACTOR;
 use crate::math::{self, Backend};
+use crate::ratio_map::{Local, RatioMap};
 #[cfg(feature = "plasticity")]
 use crate::thornton::yield_speed_in;
-use crate::ratio_map::{Local, RatioMap};
 
 /// `|det|` of the map `(ln R, ln u) -> (ln F_max, ln t_c)`.
 pub const JACOBIAN: f32 = 1.6;

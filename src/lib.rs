@@ -24,11 +24,11 @@ pub mod hertz;
 pub mod material;
 pub mod math;
 pub mod monitor;
+pub mod ratio_map;
 pub mod sampled;
 pub mod scene;
 pub mod shape_fit;
 pub mod thornton;
-pub mod ratio_map;
 
 pub use chain_bias::ChainBias;
 pub use classifier::{Measurement, RejectReason, Verdict};

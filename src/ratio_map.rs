@@ -44,6 +44,8 @@ pub struct RatioMap {
     direction: (f32, f32),
     /// `s` of the first point.
     start: f32,
+    /// `s` of the last point (as given, so that the map can be written out bit for bit).
+    end: f32,
     /// Spacing of the points in `s`.
     step: f32,
     /// `phi_F(s) = ln(F_max / F_Hertz)` at each point.
@@ -94,6 +96,7 @@ impl RatioMap {
         let map = Self {
             direction,
             start: s_range.0,
+            end: s_range.1,
             step,
             ln_force,
             ln_duration,
@@ -127,6 +130,17 @@ impl RatioMap {
         }
         Self::new((0.0, 1.0), ln_speed, lf, lt)
             .map_err(|_| Error::OutOfRange("yield_pressure_pa (map not invertible)"))
+    }
+
+    /// What the map was built from: `(direction, s_range, ln_force, ln_duration)` of
+    /// [`RatioMap::new`].
+    pub fn parts(&self) -> ((f32, f32), (f32, f32), &[f32; POINTS], &[f32; POINTS]) {
+        (
+            self.direction,
+            (self.start, self.end),
+            &self.ln_force,
+            &self.ln_duration,
+        )
     }
 
     /// `(p, q)` of `h(s) = s + p phi_F + q phi_t`.
@@ -232,7 +246,10 @@ mod tests {
         for y in [-0.5, 0.3, 1.2, 2.0] {
             let l = elastic.local(y);
             assert!(l.ln_force == 0.0 && l.ln_duration == 0.0, "{l:?}");
-            assert!((l.jacobian - 1.6).abs() < 1e-6 && l.dx == (0.125, 0.75), "{l:?}");
+            assert!(
+                (l.jacobian - 1.6).abs() < 1e-6 && l.dx == (0.125, 0.75),
+                "{l:?}"
+            );
             assert!(l.dy == (0.625, -1.25), "{l:?}");
         }
         let Ok(map) = RatioMap::thornton::<M>(0.006, range) else {
@@ -242,7 +259,10 @@ mod tests {
             let (x, _) = (-3.5f32, 0);
             let (f, t) = map.forward(x, y);
             let (xb, yb, _) = map.invert(2.0 * x + 1.2 * y + f, x - 0.2 * y + t);
-            assert!((xb - x).abs() < 2e-5 && (yb - y).abs() < 2e-5, "{y} -> {yb}");
+            assert!(
+                (xb - x).abs() < 2e-5 && (yb - y).abs() < 2e-5,
+                "{y} -> {yb}"
+            );
             let j = map.local(y).jacobian;
             assert!(j > 1.0 && j < 1.6, "{j}");
         }
@@ -277,7 +297,10 @@ mod tests {
             assert!((l.dy.1 - m[0][0] / det).abs() < 1e-4, "{l:?}");
             let (pf, pt) = map.forward(x, y);
             let (xb, yb, _) = map.invert(2.0 * x + 1.2 * y + pf, x - 0.2 * y + pt);
-            assert!((xb - x).abs() < 1e-4 && (yb - y).abs() < 1e-4, "{x},{y} -> {xb},{yb}");
+            assert!(
+                (xb - x).abs() < 1e-4 && (yb - y).abs() < 1e-4,
+                "{x},{y} -> {xb},{yb}"
+            );
         }
     }
 

@@ -712,12 +712,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
 /// ([`Envelope::yielding`]; its material: effective modulus `e` Pa, density `rho` kg/m^3).
 /// Without the `ratio_map` feature a class with a table is refused, and without `plasticity`
 /// one that yields.
-fn bend<M: Backend>(
-    env: Envelope,
-    c: &ParticleClass,
-    e: f32,
-    rho: f32,
-) -> Result<Envelope, Error> {
+fn bend<M: Backend>(env: Envelope, c: &ParticleClass, e: f32, rho: f32) -> Result<Envelope, Error> {
     #[cfg(feature = "ratio_map")]
     if let Some(map) = c.ratio_map {
         return env.bent_by(map);

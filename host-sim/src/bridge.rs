@@ -3,3 +3,4 @@
 
 pub mod calibrate;
 pub mod convert;
+pub mod ratio_table;

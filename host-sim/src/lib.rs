@@ -24,7 +24,7 @@ pub mod scene;
 pub mod score;
 pub mod sim;
 
-pub use bridge::{calibrate, convert};
+pub use bridge::{calibrate, convert, ratio_table};
 pub use cli::{caving_cli, impact_cli};
 pub use physics::{
     hertz64, impact, integrate, integrator_cases, law_spec, laws, sim_error, thornton,

@@ -79,6 +79,21 @@ pub fn class_to_kernel(c: &ClassSpec) -> ParticleClass {
     k
 }
 
+/// The kernel classes of a scene file ([`class_to_kernel`]), each with its ratio table when
+/// the scene's law needs one ([`crate::bridge::ratio_table`]: a fixed-coefficient Adams law); a table
+/// that cannot be integrated or that the kernel refuses is an error.
+pub fn classes_to_kernel(scene: &SceneFile) -> Result<Vec<ParticleClass>, ConvertError> {
+    let mut classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
+    if crate::bridge::ratio_table::needs_tables(scene) {
+        for (i, k) in classes.iter_mut().enumerate() {
+            let table = crate::bridge::ratio_table::class_table(scene, i)
+                .map_err(ConvertError::Calibration)?;
+            k.ratio_map = Some(table.to_kernel().map_err(ConvertError::Kernel)?);
+        }
+    }
+    Ok(classes)
+}
+
 /// The sensor chain the kernel inverts: `SensorChain::from_plate(f_s, M, S, noise, bits)`,
 /// i.e. `force_per_count_n = M / S` (N per count) and the ADC range of `bits`, with the beam
 /// modes and the accelerometer resonance as the kernel's `ChainDynamics` (offset and drift are
@@ -202,7 +217,7 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
             capacity: N,
         });
     }
-    let classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
+    let classes = classes_to_kernel(scene)?;
     Scene::new(
         material_to_kernel(&scene.plate.material()),
         &classes,
@@ -219,7 +234,10 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
 /// `shape_tolerance >= 1.5 x` the spread of `ln q` (between impacts, plus that of sampling at
 /// the scene's rate), `model_sigma >= ` the larger spread of
 /// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend,
-/// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them).
+/// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them). A scene
+/// whose classes carry ratio tables ([`classes_to_kernel`]) leaves the force and duration
+/// ratios to them (1 here), and its `model_sigma` is at least what the tables leave against
+/// direct integration ([`crate::bridge::ratio_table::class_residual`]).
 pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> {
     let mut s = settings_to_kernel(&scene.settings);
     let o = &scene.settings;
@@ -233,9 +251,14 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
     if let Some(c) = cal.filter(|_| scene.yields()) {
         s.flat_top_ratio = c.flat_top_ratio.max(1.0) as f32;
     }
+    let tables = crate::bridge::ratio_table::needs_tables(scene);
+    let unless_tables = |v: f64| if tables { 1.0 } else { v };
     s.contact = ContactCalibration {
-        force_ratio: pick(o.force_ratio, cal.map(|c| c.ratios.force)),
-        duration_ratio: pick(o.duration_ratio, cal.map(|c| c.ratios.duration / area)),
+        force_ratio: pick(o.force_ratio, cal.map(|c| unless_tables(c.ratios.force))),
+        duration_ratio: pick(
+            o.duration_ratio,
+            cal.map(|c| unless_tables(c.ratios.duration / area)),
+        ),
         shape_ratio: pick(o.shape_ratio, cal.map(|c| c.ratios.shape)),
         skewness: o.skewness.or(cal.map(|c| c.skewness)).unwrap_or(0.0) as f32,
         sampled: cal
@@ -248,8 +271,12 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
             s.shape_tolerance = s.shape_tolerance.max((1.5 * spread) as f32);
         }
         if o.model_sigma.is_none() {
-            let spread = c.spread_ln.force.max(c.spread_ln.duration) as f32;
-            s.model_sigma = s.model_sigma.max(spread);
+            let spread = if tables {
+                table_residual(scene)?
+            } else {
+                c.spread_ln.force.max(c.spread_ln.duration)
+            };
+            s.model_sigma = s.model_sigma.max(spread as f32);
         }
         if o.skew_tolerance.is_none() {
             s.skew_tolerance = s.skew_tolerance.max((1.5 * c.skewness_spread) as f32);
@@ -259,6 +286,20 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
         }
     }
     Ok(s)
+}
+
+/// The largest residual of any class's ratio table against direct integration, of the peak
+/// force or the duration, in log units ([`crate::bridge::ratio_table::class_residual`]).
+fn table_residual(scene: &SceneFile) -> Result<f64, ConvertError> {
+    let mut worst = 0.0f64;
+    for i in 0..scene.classes.len() {
+        let table =
+            crate::bridge::ratio_table::class_table(scene, i).map_err(ConvertError::Calibration)?;
+        let (f, t) = crate::bridge::ratio_table::class_residual(scene, i, &table)
+            .map_err(ConvertError::Calibration)?;
+        worst = worst.max(f).max(t);
+    }
+    Ok(worst)
 }
 
 /// A kernel measurement in `f64`: peak force (N), duration (s) and their log-unit standard

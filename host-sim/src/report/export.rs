@@ -15,13 +15,14 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use coalshock::ratio_map::RatioMap;
 use coalshock::{
     Accelerometer, BeamMode, ChainTolerance, ContactCalibration, Material, ParticleClass, Range,
     SampledCalibration, Settings, Speed,
 };
 
 use crate::bridge::convert::{
-    ConvertError, calibrated_settings, class_to_kernel, dynamics_to_kernel, material_to_kernel,
+    ConvertError, calibrated_settings, classes_to_kernel, dynamics_to_kernel, material_to_kernel,
     scene_to_kernel,
 };
 use crate::scene::SceneFile;
@@ -99,6 +100,9 @@ fn class(out: &mut String, c: &ParticleClass) {
     if let Some(p) = c.yield_pressure_pa {
         let _ = writeln!(fields, "            yield_pressure_pa: Some({}),", lit(p));
     }
+    if let Some(m) = &c.ratio_map {
+        fields.push_str(&ratio_map_field(m));
+    }
     if fields.is_empty() {
         let _ = writeln!(out, "        {},", args.replace("{indent}", "        "));
     } else {
@@ -109,6 +113,41 @@ fn class(out: &mut String, c: &ParticleClass) {
             args.replace("{indent}", "            "),
         );
     }
+}
+
+/// The field `ratio_map: Some(RatioMap::new(direction, s_range, ln_force, ln_duration)?),`
+/// of a class's table, every literal reading back bit for bit.
+fn ratio_map_field(m: &RatioMap) -> String {
+    let ((a, b), (s0, s1), lf, lt) = m.parts();
+    let array = |v: &[f32]| {
+        let inner = " ".repeat(20);
+        let mut lines = Vec::new();
+        let mut line = inner.clone();
+        for item in v.iter().map(|&x| lit(x)) {
+            if line.len() > inner.len() && line.len() + 1 + item.len() + 1 > 100 {
+                lines.push(std::mem::replace(&mut line, inner.clone()));
+            }
+            if line.len() > inner.len() {
+                line.push(' ');
+            }
+            let _ = write!(line, "{item},");
+        }
+        lines.push(line);
+        format!(
+            "                [\n{}\n                ],\n",
+            lines.join("\n")
+        )
+    };
+    format!(
+        "            ratio_map: Some(RatioMap::new(\n                ({}, {}),\n                \
+         ({}, {}),\n{}{}            )?),\n",
+        lit(a),
+        lit(b),
+        lit(s0),
+        lit(s1),
+        array(lf),
+        array(lt),
+    )
 }
 
 fn contact_is_default(c: &ContactCalibration) -> bool {
@@ -267,7 +306,7 @@ fn settings(out: &mut String, s: &Settings) {
 pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertError> {
     scene_to_kernel(scene)?;
     let settings_k = calibrated_settings(scene)?;
-    let classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
+    let classes = classes_to_kernel(scene)?;
     let plate = material_to_kernel(&scene.plate.material());
     let dynamics = dynamics_to_kernel(&scene.sensor)?;
     let rigid = dynamics.is_rigid();
@@ -307,6 +346,7 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
         }
     }
     uses.sort_unstable();
+    let tables = classes.iter().any(|c| c.ratio_map.is_some());
     // One import list, filled to rustfmt's 100 columns as it would.
     let one_line = format!("use coalshock::{{{}}};", uses.join(", "));
     let mut lines = Vec::new();
@@ -326,8 +366,13 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
     let _ = write!(
         out,
         "use coalshock::math::Backend;\n\
-         use coalshock::scene::DEFAULT_CLASSES;\n\
-         {list}\n\n"
+         {}use coalshock::scene::DEFAULT_CLASSES;\n\
+         {list}\n\n",
+        if tables {
+            "use coalshock::ratio_map::RatioMap;\n"
+        } else {
+            ""
+        }
     );
     let _ = write!(
         out,
