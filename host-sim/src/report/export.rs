@@ -120,23 +120,9 @@ fn class(out: &mut String, c: &ParticleClass) {
 fn ratio_map_field(m: &RatioMap) -> String {
     let ((a, b), (s0, s1), lf, lt) = m.parts();
     let array = |v: &[f32]| {
-        let inner = " ".repeat(20);
-        let mut lines = Vec::new();
-        let mut line = inner.clone();
-        for item in v.iter().map(|&x| lit(x)) {
-            if line.len() > inner.len() && line.len() + 1 + item.len() + 1 > 100 {
-                lines.push(std::mem::replace(&mut line, inner.clone()));
-            }
-            if line.len() > inner.len() {
-                line.push(' ');
-            }
-            let _ = write!(line, "{item},");
-        }
-        lines.push(line);
-        format!(
-            "                [\n{}\n                ],\n",
-            lines.join("\n")
-        )
+        let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
+        let lines = array_lines(&items, &" ".repeat(20));
+        format!("                [\n{}\n                ],\n", lines.join("\n"))
     };
     format!(
         "            ratio_map: Some(RatioMap::new(\n                ({}, {}),\n                \
@@ -175,24 +161,29 @@ fn lit_array_field(name: &str, v: &[f32], indent: usize) -> String {
     if one_line.len() <= 60 && field.len() <= 100 {
         return field + "\n";
     }
-    let inner = " ".repeat(indent + 4);
-    let mut lines = Vec::new();
-    if items.iter().all(|i| i.len() <= 10) {
-        let mut line = inner.clone();
-        for item in &items {
-            if line.len() > inner.len() && line.len() + 1 + item.len() + 1 > 100 {
-                lines.push(std::mem::replace(&mut line, inner.clone()));
-            }
-            if line.len() > inner.len() {
-                line.push(' ');
-            }
-            let _ = write!(line, "{item},");
-        }
-        lines.push(line);
-    } else {
-        lines.extend(items.iter().map(|item| format!("{inner}{item},")));
-    }
+    let lines = array_lines(&items, &" ".repeat(indent + 4));
     format!("{pad}{name}: [\n{}\n{pad}],\n", lines.join("\n"))
+}
+
+/// The lines of a multi-line array of `items`, each starting with `inner`, as rustfmt lays
+/// them out: filled to 100 columns when every item is at most 10 characters, else one per line.
+fn array_lines(items: &[String], inner: &str) -> Vec<String> {
+    if !items.iter().all(|i| i.len() <= 10) {
+        return items.iter().map(|item| format!("{inner}{item},")).collect();
+    }
+    let mut lines = Vec::new();
+    let mut line = inner.to_string();
+    for item in items {
+        if line.len() > inner.len() && line.len() + 1 + item.len() + 1 > 100 {
+            lines.push(std::mem::replace(&mut line, inner.to_string()));
+        }
+        if line.len() > inner.len() {
+            line.push(' ');
+        }
+        let _ = write!(line, "{item},");
+    }
+    lines.push(line);
+    lines
 }
 
 /// The sampling correction as a `SampledCalibration` literal, or its `NONE`.
@@ -520,6 +511,9 @@ mod tests {
             for c in kernel.classes() {
                 if c.prior != 1.0 {
                     has(format!("prior: {}", lit(c.prior)));
+                }
+                if let Some(m) = &c.ratio_map {
+                    has(ratio_map_field(m));
                 }
                 if let Some(p) = c.yield_pressure_pa {
                     has(format!("yield_pressure_pa: Some({}),", lit(p)));
