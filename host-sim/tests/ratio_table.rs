@@ -46,7 +46,10 @@ fn ratios_depend_on_lambda_alone_for_a_short_ramp() {
     let r2 = r1 * f64::powf(u1 / u2, 0.1);
     let a = adams_ratios(&file, 1e-8, r1, u1);
     let b = adams_ratios(&file, 1e-8, r2, u2);
-    assert!((a.0 - b.0).abs() < 2e-3 && (a.1 - b.1).abs() < 2e-3, "{a:?} {b:?}");
+    assert!(
+        (a.0 - b.0).abs() < 2e-3 && (a.1 - b.1).abs() < 2e-3,
+        "{a:?} {b:?}"
+    );
     let other = adams_ratios(&file, 1e-8, 0.03, u1);
     assert!((a.0 - other.0).abs() > 0.05, "{a:?} {other:?}");
 }
@@ -67,12 +70,25 @@ fn tables_match_direct_integration_off_the_table() {
         let u = file.classes[class].speed_range_m_s();
         let r = file.classes[class].radius_m;
         let mut lf = Vec::new();
-        for (radius, speed) in [(r.min, u.min), (r.min, u.max), (r.max, u.min), (r.max, u.max)] {
-            lf.push(direct(&file, class, radius, speed).expect("direct").force.ln());
+        for (radius, speed) in [
+            (r.min, u.min),
+            (r.min, u.max),
+            (r.max, u.min),
+            (r.max, u.max),
+        ] {
+            lf.push(
+                direct(&file, class, radius, speed)
+                    .expect("direct")
+                    .force
+                    .ln(),
+            );
         }
         let mean = lf.iter().sum::<f64>() / lf.len() as f64;
         let spread = lf.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max);
-        assert!(spread > 4.0 * wf, "class {class}: spread {spread}, table {wf}");
+        assert!(
+            spread > 4.0 * wf,
+            "class {class}: spread {spread}, table {wf}"
+        );
     }
 }
 
@@ -96,9 +112,15 @@ fn kernel_envelopes_follow_the_integrator() {
             let (x, y) = (f32::ln(radius as f32), f32::ln(speed as f32));
             let (lf, lt) = env.forward(x, y);
             let (ef, et) = (lf as f64 - want_f, lt as f64 - want_t);
-            assert!(ef.abs() < 0.035 && et.abs() < 0.035, "{radius} {speed}: {ef} {et}");
+            assert!(
+                ef.abs() < 0.035 && et.abs() < 0.035,
+                "{radius} {speed}: {ef} {et}"
+            );
             let (xb, yb) = env.invert_ln(lf, lt);
-            assert!((xb - x).abs() < 1e-4 && (yb - y).abs() < 1e-4, "{x},{y} -> {xb},{yb}");
+            assert!(
+                (xb - x).abs() < 1e-4 && (yb - y).abs() < 1e-4,
+                "{x},{y} -> {xb},{yb}"
+            );
         }
     }
 }
@@ -111,6 +133,9 @@ fn scenes_that_need_no_table_carry_none() {
         let file = scene(name);
         assert!(!needs_tables(&file), "{name}");
         let kernel = scene_to_kernel(&file).expect("kernel scene");
-        assert!(kernel.envelopes().iter().all(|e| e.ratio_map.is_none()), "{name}");
+        assert!(
+            kernel.envelopes().iter().all(|e| e.ratio_map.is_none()),
+            "{name}"
+        );
     }
 }

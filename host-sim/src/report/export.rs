@@ -122,7 +122,10 @@ fn ratio_map_field(m: &RatioMap) -> String {
     let array = |v: &[f32]| {
         let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
         let lines = array_lines(&items, &" ".repeat(20));
-        format!("                [\n{}\n                ],\n", lines.join("\n"))
+        format!(
+            "                [\n{}\n                ],\n",
+            lines.join("\n")
+        )
     };
     format!(
         "            ratio_map: Some(RatioMap::new(\n                ({}, {}),\n                \
