@@ -132,15 +132,24 @@ impl RatioMap {
             .map_err(|_| Error::OutOfRange("yield_pressure_pa (map not invertible)"))
     }
 
-    /// What the map was built from: `(direction, s_range, ln_force, ln_duration)` of
-    /// [`RatioMap::new`].
-    pub fn parts(&self) -> ((f32, f32), (f32, f32), &[f32; POINTS], &[f32; POINTS]) {
-        (
-            self.direction,
-            (self.start, self.end),
-            &self.ln_force,
-            &self.ln_duration,
-        )
+    /// `(a, b)` of `s = a ln R + b ln u`, as given to [`RatioMap::new`].
+    pub fn direction(&self) -> (f32, f32) {
+        self.direction
+    }
+
+    /// `s` of the first and last points, as given to [`RatioMap::new`].
+    pub fn s_range(&self) -> (f32, f32) {
+        (self.start, self.end)
+    }
+
+    /// `ln(F_max / F_Hertz)` at each point.
+    pub fn ln_force(&self) -> &[f32; POINTS] {
+        &self.ln_force
+    }
+
+    /// `ln(t_c / t_Hertz)` at each point.
+    pub fn ln_duration(&self) -> &[f32; POINTS] {
+        &self.ln_duration
     }
 
     /// `(p, q)` of `h(s) = s + p phi_F + q phi_t`.

@@ -118,7 +118,7 @@ fn class(out: &mut String, c: &ParticleClass) {
 /// The field `ratio_map: Some(RatioMap::new(direction, s_range, ln_force, ln_duration)?),`
 /// of a class's table, every literal reading back bit for bit.
 fn ratio_map_field(m: &RatioMap) -> String {
-    let ((a, b), (s0, s1), lf, lt) = m.parts();
+    let ((a, b), (s0, s1)) = (m.direction(), m.s_range());
     let array = |v: &[f32]| {
         let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
         let lines = array_lines(&items, &" ".repeat(20));
@@ -134,8 +134,8 @@ fn ratio_map_field(m: &RatioMap) -> String {
         lit(b),
         lit(s0),
         lit(s1),
-        array(lf),
-        array(lt),
+        array(m.ln_force()),
+        array(m.ln_duration()),
     )
 }
 
