@@ -17,7 +17,7 @@ fn scene(name: &str) -> SceneFile {
     load(path).expect("shipped scene loads")
 }
 
-/// `(ln F ratio, ln t_c ratio)` of coal on the paper's plate under Adams with `c_max` 687 N s/m
+/// `(ln F ratio, ln t_c ratio)` of coal on the paper's plate under Adams with `c_max` 687.16 N s/m
 /// and ramp depth `d_m`.
 fn adams_ratios(file: &SceneFile, d_m: f64, radius_m: f64, speed_m_s: f64) -> (f64, f64) {
     let mut spec = ImpactSpec::new(
@@ -27,7 +27,7 @@ fn adams_ratios(file: &SceneFile, d_m: f64, radius_m: f64, speed_m_s: f64) -> (f
         speed_m_s,
     );
     spec.law = LawSpec::Adams {
-        c_max_n_s_m: 687.0,
+        c_max_n_s_m: 687.16,
         d_m,
     };
     let r = pulse_ratios(&spec).expect("integrates");
