@@ -11,8 +11,8 @@
 //! `s = -2 ln R - ln u / 5` alone. The table holds them at [`POINTS`] equally spaced `s` over
 //! the class's box, each integrated on the line of the box's central `ln delta* = ln R +
 //! 4/5 ln u` (the ramp's share `d / delta*` of the box's middle); [`class_residual`] measures
-//! what the rest of the box leaves (the ramp's share varies from about 0.03 to 0.2 over the
-//! paper's box).
+//! what the rest of the box leaves (the ramp's share `d / delta_max` varies from 0.02 to 0.19
+//! over the paper's box).
 
 use coalshock::ratio_map::{POINTS, RatioMap};
 
