@@ -443,10 +443,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             let table: Option<()> = None;
             if c.yield_pressure_pa.is_some() || table.is_some() {
                 env = bend::<M>(env, c, e_eff, rho)?;
-                let (x0, x1) = env.ln_radius;
-                let (y0, y1) = env.ln_speed;
-                short = M::exp(env.forward(x0, y1).1);
-                long = M::exp(env.forward(x1, y0).1);
+                // A bent duration's extremes need not be Hertz's corners: all four are taken.
+                let ln_t = env.corners().map(|(x, y)| env.forward(x, y).1);
+                short = M::exp(ln_t.iter().fold(f32::INFINITY, |a, &b| a.min(b)));
+                long = M::exp(ln_t.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)));
             }
             shortest = shortest.min(short);
             longest = longest.max(long);
