@@ -16,7 +16,8 @@
 //! closed forms of the Hertz pulse (written here from their formulas, not taken from the
 //! kernel). For the restitution-parametrised laws the ratios depend on the restitution alone;
 //! for Adams (a fixed `c_max` and penetration depth) they vary with size and speed, which the
-//! reported spread shows.
+//! reported spread shows: such a scene's force and duration ratios are carried per class by
+//! [`crate::bridge::ratio_table`] instead.
 
 use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
