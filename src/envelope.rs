@@ -310,6 +310,12 @@ impl Envelope {
         }
     }
 
+    /// Whether [`Envelope::ln_density_excess`] changes along `ln R` at a fixed `ln u` (a map
+    /// whose direction has a radius part; not Thornton's, along `ln u` alone).
+    pub fn excess_varies_with_radius(&self) -> bool {
+        self.bent().is_some_and(|m| m.direction().0 != 0.0)
+    }
+
     /// The measurement noise `(sigma_ln_force, sigma_ln_duration)` carried into this bent
     /// class's `(ln R, ln u)` at the point `(ln_force, ln_duration)` maps to, and the same
     /// widened by a chain's bias `bias_ln_force` ([`NoiseXy::through`],

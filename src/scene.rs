@@ -11,6 +11,7 @@ use crate::error::{Error, positive, representable};
 use crate::hertz;
 use crate::material::{Material, effective_modulus_pa};
 use crate::math::{Backend, DefaultBackend};
+use crate::ratio_map::RatioMap;
 pub use crate::sampled::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
 
 /// Shortest duration, in samples, that is classified: a pulse measured shorter (by more than
@@ -57,12 +58,6 @@ pub struct ParticleClass {
     /// (finite, `> 0`), if the class's contact yields: its envelope is then bent by
     /// [`crate::ratio_map`]; `None`: elastic Hertz contact.
     pub yield_pressure_pa: Option<f32>,
-    /// The table of measured/Hertz ratios that bends the class's envelope when its contact's
-    /// ratios vary with size and speed (a damped law with a fixed coefficient, computed by the
-    /// host from its integrator; [`crate::ratio_map`]); `None`: the scene's single
-    /// [`ContactCalibration`] holds. With the `ratio_map` feature only.
-    #[cfg(feature = "ratio_map")]
-    pub ratio_map: Option<crate::ratio_map::RatioMap>,
 }
 
 impl ParticleClass {
@@ -81,8 +76,6 @@ impl ParticleClass {
             speed,
             prior: 1.0,
             yield_pressure_pa: None,
-            #[cfg(feature = "ratio_map")]
-            ratio_map: None,
         }
     }
 }
@@ -401,6 +394,21 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         sensor: SensorChain,
         settings: Settings,
     ) -> Result<Self, Error> {
+        Self::with_ratio_maps(plate, classes, &[], sensor, settings)
+    }
+
+    /// [`Scene::new`] with a ratio map per class (`maps[i]` for `classes[i]`; missing or `None`:
+    /// none) that bends the class's envelope when its contact's measured/Hertz ratios vary with
+    /// size and speed (a damped law with a fixed coefficient, tabulated by the host from its
+    /// integrator; [`crate::ratio_map`]): the scene's [`ContactCalibration`] then holds only
+    /// what the table leaves. Without the `ratio_map` feature a class with a map is refused.
+    pub fn with_ratio_maps(
+        plate: Material,
+        classes: &[ParticleClass],
+        maps: &[Option<RatioMap>],
+        sensor: SensorChain,
+        settings: Settings,
+    ) -> Result<Self, Error> {
         plate.validate()?;
         sensor.check()?;
         settings.check()?;
@@ -416,7 +424,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let mut stored = Vec::new();
         let mut shortest = f32::INFINITY;
         let mut longest = 0.0f32;
-        for c in classes {
+        for (i, c) in classes.iter().enumerate() {
+            let table = maps.get(i).copied().flatten();
             let e_eff = effective_modulus_pa(&c.material, &plate)?;
             let (speed, beta) = match c.speed {
                 Speed::Uniform(r) => (r.checked("speed_m_s")?, 1.0),
@@ -437,12 +446,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             let mut short =
                 hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
             let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
-            #[cfg(feature = "ratio_map")]
-            let table = c.ratio_map;
-            #[cfg(not(feature = "ratio_map"))]
-            let table: Option<()> = None;
             if c.yield_pressure_pa.is_some() || table.is_some() {
-                env = bend::<M>(env, c, e_eff, rho)?;
+                env = bend::<M>(env, c, table, e_eff, rho)?;
                 // A bent duration's extremes need not be Hertz's corners: all four are taken.
                 let ln_t = env.corners().map(|(x, y)| env.forward(x, y).1);
                 short = M::exp(ln_t.iter().fold(f32::INFINITY, |a, &b| a.min(b)));
@@ -620,10 +625,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let (x0, x1) = env.ln_radius;
         // A bent class's own density varies along the row; taken linear between its ends.
         let own = *lp + env.ln_normalizer + env.speed_beta * y;
-        let (own_a, own_b) = (
-            own + env.ln_density_excess::<M>(x0, y),
-            own + env.ln_density_excess::<M>(x1, y),
-        );
+        let own_a = own + env.ln_density_excess::<M>(x0, y);
+        let own_b = if env.excess_varies_with_radius() {
+            own + env.ln_density_excess::<M>(x1, y)
+        } else {
+            own_a
+        };
         let fa = env.forward(x0, y);
         let fb = env.forward(x1, y);
         let mut possible = Intervals::<N>::EMPTY;
@@ -707,15 +714,28 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     }
 }
 
-/// The envelope `env` of class `c` bent by its ratio table, if it carries one
+/// The envelope `env` of class `c` bent by its ratio map `table`, if it has one
 /// ([`Envelope::bent_by`]), else by its yield at `c.yield_pressure_pa` Pa
 /// ([`Envelope::yielding`]; its material: effective modulus `e` Pa, density `rho` kg/m^3).
-/// Without the `ratio_map` feature a class with a table is refused, and without `plasticity`
+/// Without the `ratio_map` feature a class with a map is refused, and without `plasticity`
 /// one that yields.
-fn bend<M: Backend>(env: Envelope, c: &ParticleClass, e: f32, rho: f32) -> Result<Envelope, Error> {
-    #[cfg(feature = "ratio_map")]
-    if let Some(map) = c.ratio_map {
+fn bend<M: Backend>(
+    env: Envelope,
+    c: &ParticleClass,
+    table: Option<RatioMap>,
+    e: f32,
+    rho: f32,
+) -> Result<Envelope, Error> {
+    if let Some(map) = table {
+        #[cfg(feature = "ratio_map")]
         return env.bent_by(map);
+        #[cfg(not(feature = "ratio_map"))]
+        {
+            let _ = map;
+            return Err(Error::OutOfRange(
+                "ratio map (kernel built without the `ratio_map` feature)",
+            ));
+        }
     }
     #[cfg(feature = "plasticity")]
     if let Some(p_y) = c.yield_pressure_pa {

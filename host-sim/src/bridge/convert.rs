@@ -3,6 +3,7 @@
 //! (a value beyond the f32 range becomes infinite and the kernel refuses it by name).
 
 use coalshock::math::Backend;
+use coalshock::ratio_map::RatioMap;
 use coalshock::scene::{DEFAULT_CLASSES, SAMPLED_POINTS};
 
 use crate::bridge::calibrate::Sampled64;
@@ -79,19 +80,21 @@ pub fn class_to_kernel(c: &ClassSpec) -> ParticleClass {
     k
 }
 
-/// The kernel classes of a scene file ([`class_to_kernel`]), each with its ratio table when
-/// the scene's law needs one ([`crate::bridge::ratio_table`]: a fixed-coefficient Adams law); a table
-/// that cannot be integrated or that the kernel refuses is an error.
-pub fn classes_to_kernel(scene: &SceneFile) -> Result<Vec<ParticleClass>, ConvertError> {
-    let mut classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
-    if crate::bridge::ratio_table::needs_tables(scene) {
-        for (i, k) in classes.iter_mut().enumerate() {
+/// The kernel ratio map of each class of a scene file (`Scene::with_ratio_maps`): its table
+/// when the scene's law needs one ([`crate::bridge::ratio_table`]: a fixed-coefficient Adams
+/// law), else none (an empty list); a table that cannot be integrated or that the kernel
+/// refuses is an error.
+pub fn ratio_maps_to_kernel(scene: &SceneFile) -> Result<Vec<Option<RatioMap>>, ConvertError> {
+    if !crate::bridge::ratio_table::needs_tables(scene) {
+        return Ok(Vec::new());
+    }
+    (0..scene.classes.len())
+        .map(|i| {
             let table = crate::bridge::ratio_table::class_table(scene, i)
                 .map_err(ConvertError::Calibration)?;
-            k.ratio_map = Some(table.to_kernel().map_err(ConvertError::Kernel)?);
-        }
-    }
-    Ok(classes)
+            Ok(Some(table.to_kernel().map_err(ConvertError::Kernel)?))
+        })
+        .collect()
 }
 
 /// The sensor chain the kernel inverts: `SensorChain::from_plate(f_s, M, S, noise, bits)`,
@@ -217,10 +220,11 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
             capacity: N,
         });
     }
-    let classes = classes_to_kernel(scene)?;
-    Scene::new(
+    let classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
+    Scene::with_ratio_maps(
         material_to_kernel(&scene.plate.material()),
         &classes,
+        &ratio_maps_to_kernel(scene)?,
         sensor_to_kernel_in::<M>(&scene.sensor)?,
         calibrated_settings(scene)?,
     )
@@ -235,7 +239,7 @@ pub fn scene_to_kernel_in<const N: usize, M: Backend>(
 /// the scene's rate), `model_sigma >= ` the larger spread of
 /// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend,
 /// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them). A scene
-/// whose classes carry ratio tables ([`classes_to_kernel`]) leaves the force and duration
+/// whose classes carry ratio tables ([`ratio_maps_to_kernel`]) leaves the force and duration
 /// ratios to them (1 here), and its `model_sigma` is at least what the tables leave against
 /// direct integration ([`crate::bridge::ratio_table::class_residual`]).
 pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> {

@@ -22,8 +22,8 @@ use coalshock::{
 };
 
 use crate::bridge::convert::{
-    ConvertError, calibrated_settings, classes_to_kernel, dynamics_to_kernel, material_to_kernel,
-    scene_to_kernel,
+    ConvertError, calibrated_settings, class_to_kernel, dynamics_to_kernel, material_to_kernel,
+    ratio_maps_to_kernel, scene_to_kernel,
 };
 use crate::scene::SceneFile;
 
@@ -100,9 +100,6 @@ fn class(out: &mut String, c: &ParticleClass) {
     if let Some(p) = c.yield_pressure_pa {
         let _ = writeln!(fields, "            yield_pressure_pa: Some({}),", lit(p));
     }
-    if let Some(m) = &c.ratio_map {
-        fields.push_str(&ratio_map_field(m));
-    }
     if fields.is_empty() {
         let _ = writeln!(out, "        {},", args.replace("{indent}", "        "));
     } else {
@@ -115,21 +112,18 @@ fn class(out: &mut String, c: &ParticleClass) {
     }
 }
 
-/// The field `ratio_map: Some(RatioMap::new(direction, s_range, ln_force, ln_duration)?),`
-/// of a class's table, every literal reading back bit for bit.
-fn ratio_map_field(m: &RatioMap) -> String {
+/// The list item `Some(RatioMap::new(direction, s_range, ln_force, ln_duration)?),` of a
+/// class's table, every literal reading back bit for bit.
+fn ratio_map_item(m: &RatioMap) -> String {
     let ((a, b), (s0, s1)) = (m.direction(), m.s_range());
     let array = |v: &[f32]| {
         let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
-        let lines = array_lines(&items, &" ".repeat(20));
-        format!(
-            "                [\n{}\n                ],\n",
-            lines.join("\n")
-        )
+        let lines = array_lines(&items, &" ".repeat(16));
+        format!("            [\n{}\n            ],\n", lines.join("\n"))
     };
     format!(
-        "            ratio_map: Some(RatioMap::new(\n                ({}, {}),\n                \
-         ({}, {}),\n{}{}            )?),\n",
+        "        Some(RatioMap::new(\n            ({}, {}),\n            \
+         ({}, {}),\n{}{}        )?),\n",
         lit(a),
         lit(b),
         lit(s0),
@@ -300,7 +294,8 @@ fn settings(out: &mut String, s: &Settings) {
 pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertError> {
     scene_to_kernel(scene)?;
     let settings_k = calibrated_settings(scene)?;
-    let classes = classes_to_kernel(scene)?;
+    let classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
+    let maps = ratio_maps_to_kernel(scene)?;
     let plate = material_to_kernel(&scene.plate.material());
     let dynamics = dynamics_to_kernel(&scene.sensor)?;
     let rigid = dynamics.is_rigid();
@@ -340,7 +335,7 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
         }
     }
     uses.sort_unstable();
-    let tables = classes.iter().any(|c| c.ratio_map.is_some());
+    let tables = !maps.is_empty();
     // One import list, filled to rustfmt's 100 columns as it would.
     let one_line = format!("use coalshock::{{{}}};", uses.join(", "));
     let mut lines = Vec::new();
@@ -445,16 +440,25 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
         out.push_str(";\n    let sensor = sensor.with_dynamics_in::<M>(dynamics)?;\n");
     }
     settings(&mut out, &settings_k);
+    if tables {
+        out.push_str("    let maps = [\n");
+        for m in maps.iter().flatten() {
+            out.push_str(&ratio_map_item(m));
+        }
+        out.push_str("    ];\n");
+    }
     let _ = write!(
         out,
-        "    Scene::new(\n        \
+        "    Scene::{}(\n        \
                  {},\n        \
                  &classes,\n        \
-                 sensor,\n        \
+                 {}sensor,\n        \
                  settings,\n    \
              )\n\
          }}\n",
-        material(&plate)
+        if tables { "with_ratio_maps" } else { "new" },
+        material(&plate),
+        if tables { "&maps,\n        " } else { "" },
     );
     Ok(out)
 }
@@ -511,12 +515,17 @@ mod tests {
                 assert_eq!(format!("{v:?}"), lit_text, "{name}: {lit_text}");
             }
             has(material(kernel.plate()));
+            // The host's tables (the kernel fills a yielding class's map itself).
+            for m in ratio_maps_to_kernel(&file)
+                .expect("tables")
+                .iter()
+                .flatten()
+            {
+                has(ratio_map_item(m));
+            }
             for c in kernel.classes() {
                 if c.prior != 1.0 {
                     has(format!("prior: {}", lit(c.prior)));
-                }
-                if let Some(m) = &c.ratio_map {
-                    has(ratio_map_field(m));
                 }
                 if let Some(p) = c.yield_pressure_pa {
                     has(format!("yield_pressure_pa: Some({}),", lit(p)));
