@@ -89,10 +89,6 @@ impl RatioMap {
         if !(step.is_finite() && step > 0.0) {
             return Err(Error::InvertedRange("ratio map s"));
         }
-        let in_range = |v: &f32| v.is_finite() && v.abs() <= MAX_LN_RATIO;
-        if !ln_force.iter().chain(ln_duration.iter()).all(in_range) {
-            return Err(Error::OutOfRange("ratio map ratio (outside 1e-3..1e3)"));
-        }
         let map = Self {
             direction,
             start: s_range.0,
@@ -101,9 +97,12 @@ impl RatioMap {
             ln_force,
             ln_duration,
         };
-        for k in 0..POINTS - 1 {
-            // NaN slopes are refused too.
-            let steep = (map.h_at(k + 1) - map.h_at(k)) >= MIN_SLOPE * step;
+        for (k, (f, t)) in ln_force.iter().zip(ln_duration.iter()).enumerate() {
+            // NaN fails both comparisons.
+            if !(f.abs() <= MAX_LN_RATIO && t.abs() <= MAX_LN_RATIO) {
+                return Err(Error::OutOfRange("ratio map ratio (outside 1e-3..1e3)"));
+            }
+            let steep = k == 0 || (map.h_at(k) - map.h_at(k - 1)) >= MIN_SLOPE * step;
             if !steep {
                 return Err(Error::OutOfRange("ratio map (not invertible)"));
             }
@@ -117,11 +116,9 @@ impl RatioMap {
     #[cfg(feature = "plasticity")]
     pub fn thornton<M: Backend>(yield_speed_m_s: f32, ln_speed: (f32, f32)) -> Result<Self, Error> {
         let ln_vy = M::ln(positive(yield_speed_m_s, "yield speed")?);
+        // An empty range gives nonsense points, which `new` refuses.
         let (y0, y1) = ln_speed;
         let step = (y1 - y0) / (POINTS - 1) as f32;
-        if !(step.is_finite() && step > 0.0) {
-            return Err(Error::InvertedRange("speed_m_s"));
-        }
         let (mut lf, mut lt) = ([0.0; POINTS], [0.0; POINTS]);
         for (k, (f, t)) in lf.iter_mut().zip(lt.iter_mut()).enumerate() {
             let r = ratios_in::<M>(M::exp(ln_vy - (y0 + k as f32 * step)))?;
@@ -182,30 +179,42 @@ impl RatioMap {
     /// holds `s` (see the module docs: with `j = h'(s)`, `ds = (p dA + q dB) / j`,
     /// `dx = (dA - phi_F' ds)/8 + 3 (dB - phi_t' ds)/4`, `dy = 5 (dA - phi_F' ds)/8 - 5 (dB - phi_t' ds)/4`).
     pub fn local(&self, s: f32) -> Local {
-        let k = self.segment(s);
-        let pair = |v: &[f32; POINTS]| {
-            let lo = v.get(k).copied().unwrap_or(0.0);
-            (lo, v.get(k + 1).copied().unwrap_or(lo))
-        };
-        let ((f0, f1), (t0, t1)) = (pair(&self.ln_force), pair(&self.ln_duration));
-        let sk = self.start + k as f32 * self.step;
-        let (df, dt) = ((f1 - f0) / self.step, (t1 - t0) / self.step);
+        let (f, t, w) = self.on_segment(s);
+        let (df, dt) = ((f[1] - f[0]) / self.step, (t[1] - t[0]) / self.step);
         let (p, q) = self.pq();
         let j = 1.0 + p * df + q * dt;
         let (kx, ky) = ((0.125 * df + 0.75 * dt) / j, (0.625 * df - 1.25 * dt) / j);
         Local {
-            ln_force: f0 + df * (s - sk),
-            ln_duration: t0 + dt * (s - sk),
+            ln_force: f[0] + w * (f[1] - f[0]),
+            ln_duration: t[0] + w * (t[1] - t[0]),
             jacobian: 1.6 * j,
             dx: (0.125 - kx * p, 0.75 - kx * q),
             dy: (0.625 - ky * p, -1.25 - ky * q),
         }
     }
 
+    /// The segment that holds `s` (the ends extended): `phi_F` and `phi_t` at its two points,
+    /// and where `s` lies on it (0 at its first point, 1 at its second).
+    fn on_segment(&self, s: f32) -> ([f32; 2], [f32; 2], f32) {
+        let k = self.segment(s);
+        let pair = |v: &[f32; POINTS]| {
+            let lo = v.get(k).copied().unwrap_or(0.0);
+            [lo, v.get(k + 1).copied().unwrap_or(lo)]
+        };
+        let w = (s - self.start) / self.step - k as f32;
+        (pair(&self.ln_force), pair(&self.ln_duration), w)
+    }
+
+    /// `(phi_F(s), phi_t(s))`, linear on the segment that holds `s` (without the slopes of
+    /// [`RatioMap::local`]: the forward map and the inverse need only the values).
+    fn ratios_at(&self, s: f32) -> (f32, f32) {
+        let (f, t, w) = self.on_segment(s);
+        (f[0] + w * (f[1] - f[0]), t[0] + w * (t[1] - t[0]))
+    }
+
     /// `(phi_F, phi_t)` at the point `(x, y) = (ln R, ln u)`.
     pub fn forward(&self, x: f32, y: f32) -> (f32, f32) {
-        let l = self.local(self.s(x, y));
-        (l.ln_force, l.ln_duration)
+        self.ratios_at(self.s(x, y))
     }
 
     /// The `s` with `h(s) = v`: a binary search over the points (4 steps), then the segment's
@@ -230,8 +239,8 @@ impl RatioMap {
     pub fn invert(&self, a: f32, b: f32) -> (f32, f32, f32) {
         let (p, q) = self.pq();
         let s = self.s_for(p * a + q * b);
-        let l = self.local(s);
-        let (fa, fb) = (a - l.ln_force, b - l.ln_duration);
+        let (pf, pt) = self.ratios_at(s);
+        let (fa, fb) = (a - pf, b - pt);
         (0.125 * fa + 0.75 * fb, 0.625 * fa - 1.25 * fb, s)
     }
 }
