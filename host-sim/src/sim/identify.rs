@@ -101,6 +101,8 @@
 
 use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
 
+use crate::sim::sensor::expm;
+
 /// Order `q` of the pulse detector's linear predictor.
 const PREDICTOR_ORDER: usize = 8;
 /// Lag `D` of the predictor in s (at least one sample): see step 1 of the module docs.
@@ -556,29 +558,6 @@ fn ring_at(c: &[Complex<f64>], poles: &[Complex<f64>], fs: f64, k: f64) -> f64 {
         .zip(poles)
         .map(|(c, p)| 2.0 * (c * (p * (k / fs)).exp()).re)
         .sum::<f64>()
-}
-
-/// `e^M` of a small row-major square matrix (scaling and squaring, Taylor to 20 terms).
-fn expm(m: &[f64], n: usize) -> Vec<f64> {
-    let norm = (0..n)
-        .map(|c| (0..n).map(|r| m[r * n + c].abs()).sum::<f64>())
-        .fold(0.0, f64::max);
-    let s = if norm > 0.5 {
-        (norm / 0.5).log2().ceil() as i32
-    } else {
-        0
-    };
-    let a = DMatrix::from_row_slice(n, n, m) * 0.5f64.powi(s);
-    let mut result = DMatrix::<f64>::identity(n, n);
-    let mut term = DMatrix::<f64>::identity(n, n);
-    for k in 1..=20 {
-        term = &term * &a / k as f64;
-        result += &term;
-    }
-    for _ in 0..s {
-        result = &result * &result;
-    }
-    result.transpose().as_slice().to_vec()
 }
 
 /// One mode discretised for the inverse filter: state `(w^2 q, w q')` as in the sensor.

@@ -570,7 +570,7 @@ fn mat_mul(a: &[f64], b: &[f64], n: usize) -> Vec<f64> {
 /// Matrix exponential `e^M` of a row-major `n x n` matrix by scaling and squaring: `M / 2^s`
 /// with 1-norm at most 1/2, Taylor series to 24 terms (truncation below 1e-30), squared `s`
 /// times.
-fn expm(m: &[f64], n: usize) -> Vec<f64> {
+pub(crate) fn expm(m: &[f64], n: usize) -> Vec<f64> {
     let norm = (0..n)
         .map(|c| (0..n).map(|r| m[r * n + c].abs()).sum::<f64>())
         .fold(0.0, f64::max);
