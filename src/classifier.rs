@@ -180,7 +180,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let st = M::sqrt(b * b + model2);
         let lf = M::ln(m.peak_force_n);
         let lt = M::ln(m.duration_s);
-        let noise = NoiseXy::new::<M>(sf, st);
+        // The duration is the area over the peak: an error of the measured `ln F_max` comes
+        // with its opposite in `ln t_c` (the model's tolerance does not).
+        let cov = -(a * a).min(sf * st);
+        let noise = NoiseXy::new::<M>(sf, st, cov);
         let bias = self.chain_bias().bias_ln_force(lt);
         let wide = noise.with_chain_bias::<M>(bias);
 
@@ -200,7 +203,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         {
             // A bent class carries the noise through its own map, at the pulse's point.
             let (noise, wide) = env
-                .bent_noise::<M>((lf, lt), (sf, st), bias)
+                .bent_noise::<M>((lf, lt), (sf, st, cov), bias)
                 .unwrap_or((noise, wide));
             let d = env.outside_sigmas_squared(lf, lt, wide);
             if d < nearest_d {

@@ -100,10 +100,12 @@ pub struct Envelope {
     pub ratio_map: Option<RatioMap>,
 }
 
-/// Measurement noise carried from `(ln F_max, ln t_c)` into `(x, y) = (ln R, ln u)` as
-/// independent standard deviations: `sigma_x^2 = sF^2 / 64 + 9 sT^2 / 16`,
-/// `sigma_y^2 = (sF^2 + 4 sT^2) / 2.56` (from `x = ln F / 8 + 3 ln t / 4 + c`,
-/// `y = 5 ln F / 8 - 5 ln t / 4 + c`), each at least `1e-4`.
+/// Measurement noise carried from `(ln F_max, ln t_c)`, with standard deviations `sF`, `sT`
+/// and covariance `c`, into `(x, y) = (ln R, ln u)` as the standard deviations of its two
+/// marginals: `sigma_x^2 = sF^2 / 64 + 9 sT^2 / 16 + 3 c / 16`,
+/// `sigma_y^2 = (sF^2 + 4 sT^2 - 4 c) / 2.56` (from `x = ln F / 8 + 3 ln t / 4 + k`,
+/// `y = 5 ln F / 8 - 5 ln t / 4 + k`), each at least `1e-4`. The likelihood takes the two as
+/// independent: exact along one edge of a class's box, approximate at its corners.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct NoiseXy {
@@ -114,13 +116,25 @@ pub struct NoiseXy {
 }
 
 impl NoiseXy {
-    /// From the standard deviations of `ln F_max` and `ln t_c`.
-    pub fn new<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32) -> Self {
+    /// From the standard deviations of `ln F_max` and `ln t_c` and their covariance
+    /// `cov_ln` (log units squared).
+    ///
+    /// ```
+    /// use coalshock::envelope::NoiseXy;
+    /// use coalshock::math::DefaultBackend as M;
+    /// // A peak 1 % off with the area exact: ln t_c moves by the opposite, and (ln R, ln u)
+    /// // by (-5/8, 15/8) of it.
+    /// let n = NoiseXy::new::<M>(0.01, 0.01, -1e-4);
+    /// assert!((n.sigma_x - 0.00625).abs() < 1e-6 && (n.sigma_y - 0.01875).abs() < 1e-6);
+    /// ```
+    pub fn new<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32, cov_ln: f32) -> Self {
         let f2 = sigma_ln_force * sigma_ln_force;
         let t2 = sigma_ln_duration * sigma_ln_duration;
+        let var_x = f2 / 64.0 + 0.5625 * t2 + 0.1875 * cov_ln;
+        let var_y = (f2 + 4.0 * t2 - 4.0 * cov_ln) / (JACOBIAN * JACOBIAN);
         Self {
-            sigma_x: clamp_sigma(M::sqrt(f2 / 64.0 + 0.5625 * t2)),
-            sigma_y: clamp_sigma(M::sqrt((f2 + 4.0 * t2) / (JACOBIAN * JACOBIAN))),
+            sigma_x: clamp_sigma(M::sqrt(var_x.max(0.0))),
+            sigma_y: clamp_sigma(M::sqrt(var_y.max(0.0))),
         }
     }
 }
@@ -142,14 +156,21 @@ impl NoiseXy {
 }
 
 impl NoiseXy {
-    /// From the standard deviations of `ln F_max` and `ln t_c` through a bent class's map
-    /// at a point with slopes `l` ([`Local`]): `dx = dx_A d ln F + dx_B d ln t` (likewise `y`),
-    /// so `sigma_x^2 = dx_A^2 sF^2 + dx_B^2 sT^2`, `sigma_y^2 = dy_A^2 sF^2 + dy_B^2 sT^2`
+    /// From the standard deviations of `ln F_max` and `ln t_c` and their covariance `c`
+    /// through a bent class's map at a point with slopes `l` ([`Local`]):
+    /// `dx = dx_A d ln F + dx_B d ln t` (likewise `y`), so
+    /// `sigma_x^2 = dx_A^2 sF^2 + dx_B^2 sT^2 + 2 dx_A dx_B c` (likewise `y`)
     /// ([`NoiseXy::new`] for Hertz's `(1/8, 3/4)`, `(5/8, -5/4)`).
-    pub fn through<M: Backend>(sigma_ln_force: f32, sigma_ln_duration: f32, l: Local) -> Self {
+    pub fn through<M: Backend>(
+        sigma_ln_force: f32,
+        sigma_ln_duration: f32,
+        cov_ln: f32,
+        l: Local,
+    ) -> Self {
         let f2 = sigma_ln_force * sigma_ln_force;
         let t2 = sigma_ln_duration * sigma_ln_duration;
-        let var = |(ca, cb): (f32, f32)| ca * ca * f2 + cb * cb * t2;
+        let var =
+            |(ca, cb): (f32, f32)| (ca * ca * f2 + cb * cb * t2 + 2.0 * ca * cb * cov_ln).max(0.0);
         Self {
             sigma_x: clamp_sigma(M::sqrt(var(l.dx))),
             sigma_y: clamp_sigma(M::sqrt(var(l.dy))),
@@ -316,7 +337,7 @@ impl Envelope {
         self.bent().is_some_and(|m| m.direction().0 != 0.0)
     }
 
-    /// The measurement noise `(sigma_ln_force, sigma_ln_duration)` carried into this bent
+    /// The measurement noise `(sigma_ln_force, sigma_ln_duration, cov_ln)` carried into this bent
     /// class's `(ln R, ln u)` at the point `(ln_force, ln_duration)` maps to, and the same
     /// widened by a chain's bias `bias_ln_force` ([`NoiseXy::through`],
     /// [`NoiseXy::with_bias_through`]); `None` for a Hertz envelope (the caller's
@@ -325,14 +346,14 @@ impl Envelope {
     pub fn bent_noise<M: Backend>(
         &self,
         (ln_force, ln_duration): (f32, f32),
-        (sigma_ln_force, sigma_ln_duration): (f32, f32),
+        (sigma_ln_force, sigma_ln_duration, cov_ln): (f32, f32, f32),
         bias_ln_force: f32,
     ) -> Option<(NoiseXy, NoiseXy)> {
         let map = self.bent()?;
         let a = ln_force - self.ln_force_coeff;
         let b = ln_duration - self.ln_duration_coeff;
         let l = map.local(map.invert(a, b).2);
-        let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, l);
+        let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, cov_ln, l);
         Some((noise, noise.with_bias_through::<M>(bias_ln_force, l)))
     }
 

@@ -173,7 +173,9 @@ pub struct Settings {
     pub stuck_samples: u16,
     /// Model tolerance in log units added (in quadrature) to the measurement noise of both
     /// `ln F_max` and `ln t_c`: what damping, the plate and the sensor do that the Hertz model
-    /// does not.
+    /// does not. Default 0: a scene whose contact the kernel models exactly pays nothing for it
+    /// (a posterior widened beyond the measurement's noise is under-confident, and loses
+    /// coverage); host-sim sets it to the spread a calibrated law leaves.
     pub model_sigma: f32,
     /// The share of `Class` verdicts the user accepts to be wrong, in `(0, 0.5)` (default
     /// 0.01): a class is reported when its posterior reaches `1 - confident_error_rate`
@@ -284,7 +286,7 @@ impl Default for Settings {
             hold_samples: 2,
             baseline_tau_s: 0.02,
             stuck_samples: 64,
-            model_sigma: 0.01,
+            model_sigma: 0.0,
             confident_error_rate: 0.01,
             out_sigmas: 4.0,
             separability_grid: 48,
