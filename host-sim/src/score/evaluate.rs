@@ -98,7 +98,7 @@ use crate::physics::hertz64::HertzImpact64;
 use crate::scene::SceneFile;
 pub use crate::score::bayes::class_models;
 use crate::score::bayes::{Accuracy, ClassModel, FeatureNoise, bayes_accuracy, decide};
-use crate::score::mismatch::ChainMismatch;
+use crate::score::mismatch::{ChainMismatch, drawn_chain};
 use crate::score::reference::{ReferenceLimit, ReferenceOptions, reference_limit};
 use crate::score::reliability::{Reliability, reliability};
 use crate::score::replay::{match_truth, replay_events};
@@ -115,6 +115,9 @@ pub const DEFAULT_BAYES_DRAWS_PER_CLASS: usize = 20_000;
 
 /// ChaCha8 stream of the Bayes-limit Monte Carlo.
 const RNG_BAYES: u64 = 11;
+
+/// Mixed into a stream's seed for the chain drawn for its kernel (`chain_drawn`).
+const CHAIN_DRAW_SEED: u64 = 0xC4A1_D8A3;
 
 /// Fewest measured pulses from which the feature noise is estimated (fewer: taken as zero).
 pub const MIN_PULSES_FOR_NOISE: usize = 3;
@@ -139,6 +142,10 @@ pub struct EvalOptions {
     pub match_tolerance_samples: Option<u64>,
     /// How far the chain the kernel is given is off from the simulated one.
     pub chain_mismatch: ChainMismatch,
+    /// Each stream's kernel is given the chain as one node might have identified it: every
+    /// stage's parameters off by errors drawn within the scene's chain tolerance
+    /// ([`crate::score::mismatch::drawn_chain`]); exclusive with `chain_mismatch`.
+    pub chain_drawn: bool,
     /// The reference limit's grid, draws and phases.
     pub reference: ReferenceOptions,
     /// The confident-error rate the user accepts, in `(0, 0.5)`, replacing the scene file's
@@ -158,6 +165,7 @@ impl Default for EvalOptions {
             stream: StreamOptions::default(),
             match_tolerance_samples: None,
             chain_mismatch: ChainMismatch::default(),
+            chain_drawn: false,
             reference: ReferenceOptions::default(),
             confident_error_rate: None,
         }
@@ -393,6 +401,8 @@ pub struct Evaluation {
     pub equaliser_noise_gain: f64,
     /// The relative errors of the chain the kernel was given (all 0: the true chain).
     pub chain_mismatch: [f64; 3],
+    /// Whether each stream's kernel was given a chain drawn within the scene's tolerance.
+    pub chain_drawn: bool,
     /// Samples fed to the kernel (including the quiet stretches).
     pub samples_fed: u64,
     /// Pulse reports of the kernel (paired or not).
@@ -456,6 +466,11 @@ pub struct EvaluateArgs {
     /// Relative error of every beam mode gain the kernel is given (0.2: 20 % high).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub chain_gain_error: f64,
+    /// Give each stream's kernel the chain as one node might have identified it: every
+    /// stage's frequency, damping and gain off by errors drawn uniformly within the scene's
+    /// chain tolerance (checks that the posteriors it widens are calibrated).
+    #[arg(long)]
+    pub chain_drawn: bool,
 }
 
 impl EvaluateArgs {
@@ -475,6 +490,7 @@ impl EvaluateArgs {
                 ..ReferenceOptions::default()
             },
             confident_error_rate: self.confident_error_rate,
+            chain_drawn: self.chain_drawn,
             ..EvalOptions::default()
         }
     }
@@ -593,6 +609,12 @@ fn validate_options(opts: &EvalOptions) -> Result<(), EvalError> {
             return Err(option_err(name, "must be a relative error in (-1, 1)"));
         }
     }
+    if opts.chain_drawn && !m.is_none() {
+        return Err(option_err(
+            "chain_drawn",
+            "draws the chain within its tolerance: give no chain error with it",
+        ));
+    }
     Ok(())
 }
 
@@ -651,6 +673,11 @@ fn replay_streams<const N: usize, M: Backend + Send + Sync>(
         }
     }
     let run_job = |_: usize, job: &StreamJob| -> Result<ChunkResult, EvalError> {
+        if opts.chain_drawn {
+            let seed = stream_seed(opts.seed ^ CHAIN_DRAW_SEED, job.class, job.chunk);
+            let drawn = scene_to_kernel_in::<N, M>(&drawn_chain(scene, seed))?;
+            return run_stream::<N, M>(scene, opts, &drawn, models, tolerance, job);
+        }
         run_stream::<N, M>(scene, opts, kernel_scene, models, tolerance, job)
     };
     let mut all = Replayed {
@@ -892,6 +919,7 @@ fn assemble<M: Backend>(
         spurious_reports: replayed.spurious,
         equaliser_noise_gain: limits.equaliser_noise_gain,
         chain_mismatch: [m.frequency, m.damping, m.gain],
+        chain_drawn: opts.chain_drawn,
         confidence_threshold: limits.confidence_threshold,
         kernel_vs_reference: Paired {
             difference: forced_choice_accuracy - reference.accuracy,
@@ -1253,6 +1281,12 @@ impl Evaluation {
              damping {:+}, gain {:+} (relative)",
             self.equaliser_noise_gain, mf, md, mg
         );
+        if self.chain_drawn {
+            let _ = writeln!(
+                s,
+                "each stream's kernel given a chain drawn within the scene's chain tolerance"
+            );
+        }
         let _ = writeln!(
             s,
             "{} samples fed, {} pulses reported, {:.4} s in the kernel ({:.1} ns per sample)",

@@ -1,5 +1,10 @@
-//! A sensor chain as the node believes it to be, off from the truth by stated relative errors:
-//! how evaluations measure what a wrongly identified beam or accelerometer costs.
+//! A sensor chain as the node believes it to be, off from the truth by stated relative errors
+//! or by errors drawn within the scene's chain tolerance: how evaluations measure what a
+//! wrongly identified beam or accelerometer costs, and whether the posteriors the kernel
+//! widens by that tolerance are calibrated.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 use crate::scene::SceneFile;
 
@@ -38,6 +43,39 @@ impl ChainMismatch {
     }
 }
 
+/// The tolerance the kernel is told its chain has: the scene's `chain_tolerance`, or the
+/// kernel's `ChainTolerance::IDENTIFIED` when unset; `[frequency, damping, gain]`, relative.
+pub fn chain_tolerance(scene: &SceneFile) -> [f64; 3] {
+    match &scene.sensor.chain_tolerance {
+        Some(t) => [t.frequency, t.damping, t.gain],
+        None => {
+            let t = coalshock::equaliser::ChainTolerance::IDENTIFIED;
+            [t.frequency, t.damping, t.gain].map(f64::from)
+        }
+    }
+}
+
+/// The scene with its chain as one node might have identified it: every stage's frequency,
+/// damping ratio and (beam modes) gain multiplied by `1 + e`, each `e` drawn independently and
+/// uniformly in `+-` its [`chain_tolerance`] from a ChaCha8 generator seeded with `seed`
+/// (the errors the kernel's widening takes as its noise: `coalshock::chain_bias`).
+pub fn drawn_chain(scene: &SceneFile, seed: u64) -> SceneFile {
+    let [tf, td, tg] = chain_tolerance(scene);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut e = |t: f64| 1.0 + t * (2.0 * rng.random::<f64>() - 1.0);
+    let mut s = scene.clone();
+    for m in &mut s.sensor.beam_modes {
+        m.frequency_hz *= e(tf);
+        m.damping_ratio *= e(td);
+        m.gain *= e(tg);
+    }
+    if let Some(a) = &mut s.sensor.accelerometer {
+        a.frequency_hz *= e(tf);
+        a.damping_ratio *= e(td);
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -63,5 +101,25 @@ mod tests {
         assert_eq!(acc.frequency_hz, 35_000.0 * 1.02);
         assert_eq!(s.sensor.sample_rate_hz, scene.sensor.sample_rate_hz);
         assert!(ChainMismatch::default().is_none());
+    }
+
+    #[test]
+    fn drawn_chains_stay_within_the_tolerance_and_differ_by_seed() {
+        let scene = crate::scene::load(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../scenes/piezo_chain.toml"
+        ))
+        .unwrap();
+        let [tf, td, tg] = chain_tolerance(&scene);
+        let (a, b) = (drawn_chain(&scene, 1), drawn_chain(&scene, 2));
+        assert_ne!(a.sensor, b.sensor);
+        assert_eq!(a.sensor, drawn_chain(&scene, 1).sensor);
+        for s in [&a, &b] {
+            for (m, t) in s.sensor.beam_modes.iter().zip(&scene.sensor.beam_modes) {
+                assert!((m.frequency_hz / t.frequency_hz - 1.0).abs() <= tf);
+                assert!((m.damping_ratio / t.damping_ratio - 1.0).abs() <= td);
+                assert!((m.gain / t.gain - 1.0).abs() <= tg);
+            }
+        }
     }
 }
