@@ -55,9 +55,10 @@ fn ratios_depend_on_lambda_alone_for_a_short_ramp() {
 }
 
 /// The paper's fixed-`c_max` scene needs tables, and each class's table matches direct
-/// integration at a 4 x 4 grid off its line within 0.035 in log units (measured 0.022-0.030:
-/// the ramp's share of the penetration, 0.02-0.19 over the box, is the second variable the
-/// table does not follow), against a spread of 0.2-0.5 about a single calibration.
+/// integration at a 4 x 4 grid off its line with a root-mean-square residual below 0.015 in
+/// log units (measured 0.005-0.009: the ramp's share of the penetration, 0.02-0.19 over the
+/// box, is the second variable the table does not follow), against a spread of 0.2-0.5 about
+/// a single calibration.
 #[test]
 fn tables_match_direct_integration_off_the_table() {
     let file = scene("paper_adams_fixed.toml");
@@ -65,7 +66,8 @@ fn tables_match_direct_integration_off_the_table() {
     for class in 0..file.classes.len() {
         let table = class_table(&file, class).expect("table");
         let (wf, wt) = class_residual(&file, class, &table).expect("residual");
-        assert!(wf < 0.035 && wt < 0.035, "class {class}: {wf} {wt}");
+        println!("class {class}: residual spread ln F {wf:.4}, ln t_c {wt:.4}");
+        assert!(wf < 0.015 && wt < 0.015, "class {class}: {wf} {wt}");
         // The same points about one geometric-mean ratio (what one calibration per scene does).
         let u = file.classes[class].speed_range_m_s();
         let r = file.classes[class].radius_m;
@@ -125,11 +127,13 @@ fn kernel_envelopes_follow_the_integrator() {
     }
 }
 
-/// A scene whose law is calibrated once carries no table: Hertz, and Adams with `c_max`
-/// found per impact for a restitution.
+/// A scene whose law is calibrated once carries no table: Hertz, and a restitution law whose
+/// ratios are the same for every impact (Flores); Adams with `c_max` found per impact for a
+/// restitution carries one (its ramp over a fixed `d` changes the ratios with size and speed).
 #[test]
 fn scenes_that_need_no_table_carry_none() {
-    for name in ["paper.toml", "paper_adams.toml"] {
+    assert!(needs_tables(&scene("paper_adams.toml")));
+    for name in ["paper.toml", "paper_damped.toml"] {
         let file = scene(name);
         assert!(!needs_tables(&file), "{name}");
         let kernel = scene_to_kernel(&file).expect("kernel scene");

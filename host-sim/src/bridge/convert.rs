@@ -292,8 +292,9 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
     Ok(s)
 }
 
-/// The largest residual of any class's ratio table against direct integration, of the peak
-/// force or the duration, in log units ([`crate::bridge::ratio_table::class_residual`]).
+/// The largest of the classes' residual spreads (root mean square) of their ratio tables
+/// against direct integration, of the peak force or the duration, in log units
+/// ([`crate::bridge::ratio_table::class_residual`]).
 fn table_residual(scene: &SceneFile) -> Result<f64, ConvertError> {
     let mut worst = 0.0f64;
     for i in 0..scene.classes.len() {

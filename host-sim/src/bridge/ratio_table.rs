@@ -36,10 +36,15 @@ pub struct RatioTable64 {
     pub ln_duration: [f64; POINTS],
 }
 
-/// Whether `scene`'s law needs a ratio table per class: a fixed-coefficient Adams law (its
-/// damping ratio changes with size and speed); every other law is calibrated once per scene.
+/// Whether `scene`'s law needs a ratio table per class: an Adams law, with a fixed `c_max`
+/// or one solved per impact for a restitution (its damping ramps in over a fixed penetration
+/// `d`, so the ratios change with `delta_max / d`, that is with size and speed); every other
+/// law is calibrated once per scene (its ratios are the same for every impact).
 pub fn needs_tables(scene: &SceneFile) -> bool {
-    matches!(scene.contact, ContactLaw::Adams { .. })
+    matches!(
+        scene.contact,
+        ContactLaw::Adams { .. } | ContactLaw::AdamsRestitution { .. }
+    )
 }
 
 /// `s` of `(ln R, ln u)`.
@@ -129,9 +134,10 @@ impl RatioTable64 {
     }
 }
 
-/// The largest `|ln ratio - table|` of the peak force and of the duration of class `class`
-/// over a 4 x 4 grid of its box off the table's line (radius and speed at 1/8, 3/8, 5/8, 7/8
-/// of their log and linear ranges), against direct integration: what the table leaves.
+/// The root mean square of `ln ratio - table` of the peak force and of the duration of class
+/// `class` over a 4 x 4 grid of its box off the table's line (radius and speed at 1/8, 3/8,
+/// 5/8, 7/8 of their log and linear ranges), against direct integration: the standard
+/// deviation of what the table leaves, over the class's box.
 pub fn class_residual(
     scene: &SceneFile,
     class: usize,
@@ -146,9 +152,9 @@ pub fn class_residual(
             let speed = u.min + (u.max - u.min) * (2 * j + 1) as f64 / 8.0;
             let r = direct(scene, class, x.exp(), speed)?;
             let (tf, tt) = table.at(x, speed.ln());
-            wf = wf.max((r.force.ln() - tf).abs());
-            wt = wt.max((r.duration.ln() - tt).abs());
+            wf += (r.force.ln() - tf).powi(2);
+            wt += (r.duration.ln() - tt).powi(2);
         }
     }
-    Ok((wf, wt))
+    Ok(((wf / 16.0).sqrt(), (wt / 16.0).sqrt()))
 }
