@@ -32,6 +32,10 @@ pub struct ReliabilityBin {
     pub stated: f64,
     /// Share of the bin's verdicts that named the true class (weighted; 0 when empty).
     pub observed: f64,
+    /// Standard error of `observed` were the posteriors calibrated,
+    /// `sqrt(stated (1 - stated) / verdicts)` (0 when empty): a bin's `|stated - observed|`
+    /// within about twice it is what its count allows.
+    pub std_error: f64,
 }
 
 /// The reliability table and its calibration error.
@@ -70,12 +74,18 @@ pub fn reliability(verdicts: impl IntoIterator<Item = (f64, bool, f64)>) -> Reli
         .map(|b| {
             let w = sums[b][0];
             let mean = |v: f64| if w > 0.0 { v / w } else { 0.0 };
+            let stated = mean(sums[b][1]);
             ReliabilityBin {
                 lower: BIN_EDGES[b],
                 upper: BIN_EDGES[b + 1],
                 verdicts: count[b],
-                stated: mean(sums[b][1]),
+                stated,
                 observed: mean(sums[b][2]),
+                std_error: if count[b] > 0 {
+                    (stated * (1.0 - stated) / count[b] as f64).sqrt()
+                } else {
+                    0.0
+                },
             }
         })
         .collect();
@@ -99,19 +109,20 @@ impl Reliability {
     /// The table as text, one line per non-empty bin.
     pub fn table(&self) -> String {
         let mut s = format!(
-            "  {:<16}{:>9}{:>10}{:>10}{:>9}\n",
-            "posterior", "verdicts", "stated", "observed", "|diff|"
+            "  {:<16}{:>9}{:>10}{:>10}{:>9}{:>9}\n",
+            "posterior", "verdicts", "stated", "observed", "|diff|", "std err"
         );
         for b in self.bins.iter().filter(|b| b.verdicts > 0) {
             let close = if b.upper >= 1.0 { ']' } else { ')' };
             s += &format!(
-                "  [{:.3}, {:.3}{close}  {:>9}{:>9.2} %{:>8.2} %{:>7.2} %{}\n",
+                "  [{:.3}, {:.3}{close}  {:>9}{:>9.2} %{:>8.2} %{:>7.2} %{:>7.2} %{}\n",
                 b.lower,
                 b.upper,
                 b.verdicts,
                 100.0 * b.stated,
                 100.0 * b.observed,
                 100.0 * (b.stated - b.observed).abs(),
+                100.0 * b.std_error,
                 if b.verdicts < self.min_verdicts {
                     "  (few)"
                 } else {
@@ -151,6 +162,9 @@ mod tests {
         assert_eq!(b(0.999).verdicts, 400);
         assert!((r.calibration_error_max - 0.05).abs() < 1e-12);
         assert!((r.calibration_error_mean - 0.05 * 300.0 / 700.0).abs() < 1e-12);
+        // The binomial standard error at the stated share: sqrt(0.95 0.05 / 300) = 1.258 pp.
+        assert!((b(0.95).std_error - 0.012_583).abs() < 1e-6);
+        assert_eq!(b(0.999).std_error, 0.0);
         // Weights: a class weighted 3 times as much moves the observed share.
         let r = reliability([(0.7, true, 3.0), (0.7, false, 1.0)]);
         assert_eq!(r.bins[3].lower, 0.7);
