@@ -1304,7 +1304,7 @@ impl Evaluation {
         format!(
             "\nreference limit (physics and the scene's stated noise, independent of the kernel)\n\
              \x20 reference limit             {:7.3} % +- {:.3} % ({} draws, {} features, \
-             Cramer-Rao sigma ln F {:.4}, ln t_c {:.4})\n\
+             duration {:?}, Cramer-Rao sigma ln F {:.4}, ln t_c {:.4})\n\
              \x20 noiseless ceiling           {:7.3} % +- {:.3} %\n\
              \x20 kernel - reference          {:+7.3} pp +- {:.3} pp\n\
              \nreliability (confidence threshold {:.4}: confident errors at most {:.2} %)\n{}",
@@ -1312,6 +1312,7 @@ impl Evaluation {
             100.0 * r.std_error,
             r.draws,
             r.features,
+            r.duration_feature,
             r.mean_sigma_ln_force,
             r.mean_sigma_ln_duration,
             100.0 * r.noiseless_accuracy,

@@ -8,8 +8,13 @@
 //!    prior box in `z = (x, y) = (ln R, ln u)`. Each is integrated with the scene's contact
 //!    law (a class that states a yield pressure: Thornton's law, [`SceneFile::class_law`]) by
 //!    host-sim's integrator ([`crate::physics::impact::simulate`]): `F_max` is the peak force,
-//!    `t_c` the pulse's duration (first contact to the first zero of the force after its
-//!    peak), as the stream's truth defines them. For undamped Hertz the features are the
+//!    and `t_c` is read two ways ([`DurationFeature`]): the pulse's duration (first contact to
+//!    the first zero of the force after its peak, as the stream's truth defines it), or the
+//!    duration its impulse gives, `J / (C_AREA F_max)` (`J = integral F dt`; the two agree
+//!    for Hertz). For a pulse whose shape changes over the box (a damped or yielding law)
+//!    each pair holds information the other lacks; the reference is the larger of the two
+//!    limits (step 5), since each bounds what an estimator of that pair can reach, and an
+//!    estimator may use either. For undamped Hertz the features are the
 //!    closed forms `F_max = k delta_max^(3/2)`, `t_c = 2.9432751843 delta_max / u`. Damped
 //!    laws, and the Adams law with a fixed `c_max` (whose damping ratio changes with size and
 //!    speed), need no calibration: the integrator gives their features directly.
@@ -30,7 +35,8 @@
 //!    `g(z)` plus Gaussian noise of covariance `S(z)`, decided by the largest
 //!    `prior_c p(f | c)`; class results weighted by the normalised priors, with the standard
 //!    error `sqrt(a (1 - a) / n)`. The same draws decided without noise give the noiseless
-//!    ceiling of the scene's physics.
+//!    ceiling of the scene's physics. For a law integrated, both duration features are
+//!    scored on the same draws and the larger accuracy is the limit.
 //!
 //! The limit is an upper bound of what a detector of the features can reach in so far as the
 //! bound is reached (the Cramér-Rao bound is the variance of an efficient estimator; at low
@@ -41,6 +47,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
+use crate::bridge::calibrate::C_AREA;
 use crate::physics::hertz64::HertzImpact64;
 use crate::physics::impact::{ImpactSpec, simulate};
 use crate::physics::integrate::SimError;
@@ -76,6 +83,16 @@ const RECORD_POINTS: f64 = 512.0;
 
 /// ChaCha8 stream of the reference Monte Carlo.
 const RNG_REFERENCE: u64 = 12;
+
+/// Which duration a reference's features take (module docs, step 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DurationFeature {
+    /// First contact to the first zero of the force after its peak, in s.
+    FirstZero,
+    /// The impulse over the Hertz pulse's area factor, `J / (C_AREA F_max)`, in s.
+    Impulse,
+}
 
 /// Options of [`reference_limit`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -149,6 +166,9 @@ pub struct ReferenceLimit {
     /// `"hertz_closed_form"` (undamped Hertz for every class) or `"integrator"` (any class
     /// under another law, a yielding class included).
     pub features: &'static str,
+    /// The duration the limit's features take (the larger limit of the two for an integrated
+    /// law; [`DurationFeature::FirstZero`] for the closed forms, where both agree).
+    pub duration_feature: DurationFeature,
     /// Grid points per axis.
     pub grid: usize,
     /// Onset phases averaged.
@@ -182,16 +202,19 @@ pub struct ClassMap {
     grid: usize,
     phases: usize,
     features: &'static str,
+    duration: DurationFeature,
     nodes: Vec<Node>,
 }
 
 impl ClassMap {
-    /// The map of class `class` of `scene` (see the module docs, steps 1-3).
+    /// The map of class `class` of `scene` with durations read as `duration` (see the module
+    /// docs, steps 1-3).
     pub fn build(
         scene: &SceneFile,
         class: usize,
         sensor: &Sensor,
         opts: &ReferenceOptions,
+        duration: DurationFeature,
     ) -> Result<Self, ReferenceError> {
         let model = class_models(scene)[class];
         let c = &scene.classes[class];
@@ -224,10 +247,15 @@ impl ClassMap {
                 let step_s = hertz.duration_s / RECORD_POINTS;
                 spec.record = Some(step_s);
                 let report = simulate(&spec).map_err(err)?;
-                let features = if closed_form {
-                    [hertz.peak_force_n.ln(), hertz.duration_s.ln()]
-                } else {
-                    [report.peak_force_n.ln(), report.pulse_duration_s.ln()]
+                let f_max = report.peak_force_n;
+                let features = match (closed_form, duration) {
+                    (true, _) => [hertz.peak_force_n.ln(), hertz.duration_s.ln()],
+                    (false, DurationFeature::FirstZero) => {
+                        [f_max.ln(), report.pulse_duration_s.ln()]
+                    }
+                    (false, DurationFeature::Impulse) => {
+                        [f_max.ln(), (report.impulse_n_s / (C_AREA * f_max)).ln()]
+                    }
                 };
                 let pulse = ForcePulse {
                     start_s: 0.0,
@@ -260,6 +288,7 @@ impl ClassMap {
             } else {
                 "integrator"
             },
+            duration,
             nodes,
         })
     }
@@ -404,10 +433,19 @@ fn node(deviation: [f64; 2], cov: Option<FeatureCovariance>) -> Node {
     }
 }
 
-/// The class maps of every class of `scene`.
+/// The class maps of every class of `scene`, durations read from the first zero.
 pub fn class_maps(
     scene: &SceneFile,
     opts: &ReferenceOptions,
+) -> Result<Vec<ClassMap>, ReferenceError> {
+    class_maps_with(scene, opts, DurationFeature::FirstZero)
+}
+
+/// The class maps of every class of `scene`, durations read as `duration`.
+pub fn class_maps_with(
+    scene: &SceneFile,
+    opts: &ReferenceOptions,
+    duration: DurationFeature,
 ) -> Result<Vec<ClassMap>, ReferenceError> {
     let opt = |field, problem: &str| ReferenceError::Option {
         field,
@@ -421,7 +459,7 @@ pub fn class_maps(
     }
     let sensor = Sensor::new(&scene.sensor)?;
     (0..scene.classes.len())
-        .map(|c| ClassMap::build(scene, c, &sensor, opts))
+        .map(|c| ClassMap::build(scene, c, &sensor, opts, duration))
         .collect()
 }
 
@@ -489,6 +527,9 @@ pub fn reference_accuracy(
         } else {
             "integrator"
         },
+        duration_feature: maps
+            .first()
+            .map_or(DurationFeature::FirstZero, |m| m.duration),
         grid: maps.first().map_or(0, |m| m.grid),
         phases: maps.first().map_or(0, |m| m.phases),
     }
@@ -506,13 +547,25 @@ pub fn reference_limit(
             problem: format!("must be in 1..={MAX_DRAWS_PER_CLASS}"),
         });
     }
-    let maps = class_maps(scene, opts)?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(RNG_REFERENCE);
-    let mut uniform = || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-    Ok(reference_accuracy(
-        &maps,
-        opts.draws_per_class,
-        &mut uniform,
-    ))
+    let limit = |duration| -> Result<ReferenceLimit, ReferenceError> {
+        let maps = class_maps_with(scene, opts, duration)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(RNG_REFERENCE);
+        let mut uniform = || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+        Ok(reference_accuracy(
+            &maps,
+            opts.draws_per_class,
+            &mut uniform,
+        ))
+    };
+    let first_zero = limit(DurationFeature::FirstZero)?;
+    if first_zero.features == "hertz_closed_form" {
+        return Ok(first_zero);
+    }
+    let impulse = limit(DurationFeature::Impulse)?;
+    Ok(if impulse.accuracy > first_zero.accuracy {
+        impulse
+    } else {
+        first_zero
+    })
 }
