@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Regenerates the tables of docs/chain.md: every chain scene at n 5000 per class, seeds 1 and
-# 2, with the chain given right and at each mismatch corner (one parameter off at a time).
+# 2, with the chain given right and at each mismatch corner (one parameter off at a time);
+# then the posteriors' calibration at n 20000 per class (CAL_N), seeds 1 and 2, with the
+# chain given right under the scene's tolerance, known exactly (tolerance 0), and drawn
+# within the tolerance for every stream (--chain-drawn).
 # Usage: bash docs/chain-tables.sh [N]   (from the repository root; needs python3)
 set -euo pipefail
 n=${1:-5000}
@@ -32,4 +35,34 @@ for scene in tail_beam mems_chain piezo_chain; do
             row "$scene" "$seed" $m
         done
     done
+done
+
+cal_n=${CAL_N:-20000}
+exact=$(mktemp -d)
+trap 'rm -rf "$exact"' EXIT
+cal_row() { # label, scene file, seed, flags...
+    local label=$1 file=$2 seed=$3
+    shift 3
+    "$bin" evaluate --scene "$file" --n "$cal_n" --seed "$seed" --reference-draws 20000 "$@" \
+        --json | python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+rel = d["reliability"]
+full = [b for b in rel["bins"] if b["verdicts"] >= rel["min_verdicts"]]
+worst = max(full, key=lambda b: abs(b["stated"] - b["observed"]))
+print("| %s | %s | %.2f | %.2f | %.2f / %.2f | %.3f / %.3f (%d) |" % (sys.argv[1], sys.argv[2],
+    100 * d["forced_choice_accuracy"], 100 * d["coverage"],
+    100 * rel["calibration_error_max"], 100 * rel["calibration_error_mean"],
+    worst["stated"], worst["observed"], worst["verdicts"]))
+' "$label" "$seed"
+}
+echo
+echo "| scene, chain | seed | forced choice (%) | coverage (%) | calibration error max / mean (pp) | worst bin: stated / observed (verdicts) |"
+echo "| --- | --- | --- | --- | --- | --- |"
+for scene in tail_beam mems_chain piezo_chain; do
+    awk '/^\[sensor\]/ { print; print "chain_tolerance = { frequency = 0.0, damping = 0.0, gain = 0.0 }"; next } 1' \
+        "scenes/$scene.toml" > "$exact/$scene.toml"
+    for seed in 1 2; do cal_row "$scene (given right, tolerance)" "scenes/$scene.toml" "$seed"; done
+    for seed in 1 2; do cal_row "$scene (known exactly)" "$exact/$scene.toml" "$seed"; done
+    for seed in 1 2; do cal_row "$scene --chain-drawn" "scenes/$scene.toml" "$seed" --chain-drawn; done
 done
