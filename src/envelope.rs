@@ -121,7 +121,7 @@ impl NoiseXy {
     ///
     /// ```
     /// use coalshock::envelope::NoiseXy;
-    /// use coalshock::math::DefaultBackend as M;
+    /// use coalshock::math::Libm as M;
     /// // A peak 1 % off with the area exact: ln t_c moves by the opposite, and (ln R, ln u)
     /// // by (-5/8, 15/8) of it.
     /// let n = NoiseXy::new::<M>(0.01, 0.01, -1e-4);
