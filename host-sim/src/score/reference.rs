@@ -207,15 +207,15 @@ pub struct ClassMap {
 }
 
 impl ClassMap {
-    /// The map of class `class` of `scene` with durations read as `duration` (see the module
-    /// docs, steps 1-3).
-    pub fn build(
+    /// The maps of class `class` of `scene` with durations read from the first zero and from
+    /// the impulse (see the module docs, steps 1-3), from one integration and one bound per
+    /// grid point (the bound does not depend on how the duration is read).
+    pub fn build_both(
         scene: &SceneFile,
         class: usize,
         sensor: &Sensor,
         opts: &ReferenceOptions,
-        duration: DurationFeature,
-    ) -> Result<Self, ReferenceError> {
+    ) -> Result<[Self; 2], ReferenceError> {
         let model = class_models(scene)[class];
         let c = &scene.classes[class];
         let (material, plate) = (c.material.material(), scene.plate.material());
@@ -229,7 +229,7 @@ impl ClassMap {
             })?;
         let closed_form = matches!(law, LawSpec::Hertz);
         let n = opts.grid;
-        let mut nodes = Vec::with_capacity(n * n);
+        let (mut first_zero, mut impulse) = (Vec::with_capacity(n * n), Vec::with_capacity(n * n));
         for j in 0..n {
             for i in 0..n {
                 let (x, y) = grid_point(&model, n, i, j);
@@ -248,14 +248,13 @@ impl ClassMap {
                 spec.record = Some(step_s);
                 let report = simulate(&spec).map_err(err)?;
                 let f_max = report.peak_force_n;
-                let features = match (closed_form, duration) {
-                    (true, _) => [hertz.peak_force_n.ln(), hertz.duration_s.ln()],
-                    (false, DurationFeature::FirstZero) => {
-                        [f_max.ln(), report.pulse_duration_s.ln()]
-                    }
-                    (false, DurationFeature::Impulse) => {
-                        [f_max.ln(), (report.impulse_n_s / (C_AREA * f_max)).ln()]
-                    }
+                let [zero_f, impulse_f] = if closed_form {
+                    [[hertz.peak_force_n.ln(), hertz.duration_s.ln()]; 2]
+                } else {
+                    [
+                        [f_max.ln(), report.pulse_duration_s.ln()],
+                        [f_max.ln(), (report.impulse_n_s / (C_AREA * f_max)).ln()],
+                    ]
                 };
                 let pulse = ForcePulse {
                     start_s: 0.0,
@@ -273,13 +272,12 @@ impl ClassMap {
                 };
                 let cov = phase_averaged_crb(sensor, &pulse, opts.phases);
                 let hertz_f = model.forward(x, y);
-                nodes.push(node(
-                    [features[0] - hertz_f.0, features[1] - hertz_f.1],
-                    cov,
-                ));
+                let deviation = |f: [f64; 2]| [f[0] - hertz_f.0, f[1] - hertz_f.1];
+                first_zero.push(node(deviation(zero_f), cov));
+                impulse.push(node(deviation(impulse_f), cov));
             }
         }
-        Ok(Self {
+        let map = |duration, nodes| Self {
             model,
             grid: n,
             phases: opts.phases,
@@ -290,7 +288,11 @@ impl ClassMap {
             },
             duration,
             nodes,
-        })
+        };
+        Ok([
+            map(DurationFeature::FirstZero, first_zero),
+            map(DurationFeature::Impulse, impulse),
+        ])
     }
 
     /// The same map with the noise replaced by `noise` everywhere.
@@ -447,6 +449,19 @@ pub fn class_maps_with(
     opts: &ReferenceOptions,
     duration: DurationFeature,
 ) -> Result<Vec<ClassMap>, ReferenceError> {
+    let [first_zero, impulse] = class_maps_both(scene, opts)?;
+    Ok(match duration {
+        DurationFeature::FirstZero => first_zero,
+        DurationFeature::Impulse => impulse,
+    })
+}
+
+/// The class maps of every class of `scene`, durations read from the first zero and from the
+/// impulse ([`ClassMap::build_both`]).
+pub fn class_maps_both(
+    scene: &SceneFile,
+    opts: &ReferenceOptions,
+) -> Result<[Vec<ClassMap>; 2], ReferenceError> {
     let opt = |field, problem: &str| ReferenceError::Option {
         field,
         problem: problem.into(),
@@ -458,9 +473,13 @@ pub fn class_maps_with(
         return Err(opt("phases", "must be in 1..=64"));
     }
     let sensor = Sensor::new(&scene.sensor)?;
-    (0..scene.classes.len())
-        .map(|c| ClassMap::build(scene, c, &sensor, opts, duration))
-        .collect()
+    let (mut first_zero, mut impulse) = (Vec::new(), Vec::new());
+    for c in 0..scene.classes.len() {
+        let [z, i] = ClassMap::build_both(scene, c, &sensor, opts)?;
+        first_zero.push(z);
+        impulse.push(i);
+    }
+    Ok([first_zero, impulse])
 }
 
 /// The Bayes-optimal class of observed features `f` among `maps` (largest prior times
@@ -547,22 +566,18 @@ pub fn reference_limit(
             problem: format!("must be in 1..={MAX_DRAWS_PER_CLASS}"),
         });
     }
-    let limit = |duration| -> Result<ReferenceLimit, ReferenceError> {
-        let maps = class_maps_with(scene, opts, duration)?;
+    let [first_zero, impulse] = class_maps_both(scene, opts)?;
+    let limit = |maps: &[ClassMap]| {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(RNG_REFERENCE);
         let mut uniform = || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-        Ok(reference_accuracy(
-            &maps,
-            opts.draws_per_class,
-            &mut uniform,
-        ))
+        reference_accuracy(maps, opts.draws_per_class, &mut uniform)
     };
-    let first_zero = limit(DurationFeature::FirstZero)?;
+    let first_zero = limit(&first_zero);
     if first_zero.features == "hertz_closed_form" {
         return Ok(first_zero);
     }
-    let impulse = limit(DurationFeature::Impulse)?;
+    let impulse = limit(&impulse);
     Ok(if impulse.accuracy > first_zero.accuracy {
         impulse
     } else {
