@@ -29,18 +29,26 @@ impl ChainMismatch {
 
     /// The scene with its chain as the kernel is told it (the simulation keeps the true one).
     pub fn applied_to(&self, scene: &SceneFile) -> SceneFile {
-        let mut s = scene.clone();
-        for m in &mut s.sensor.beam_modes {
-            m.frequency_hz *= 1.0 + self.frequency;
-            m.damping_ratio *= 1.0 + self.damping;
-            m.gain *= 1.0 + self.gain;
-        }
-        if let Some(a) = &mut s.sensor.accelerometer {
-            a.frequency_hz *= 1.0 + self.frequency;
-            a.damping_ratio *= 1.0 + self.damping;
-        }
-        s
+        let errors = [self.frequency, self.damping, self.gain];
+        scaled_chain(scene, |parameter| 1.0 + errors[parameter])
     }
+}
+
+/// The scene with every stage's chain parameter multiplied by `factor(p)`, `p` the parameter's
+/// index in `[frequency, damping, gain]`; called mode by mode (frequency, damping, gain), then
+/// for the accelerometer (frequency, damping).
+fn scaled_chain(scene: &SceneFile, mut factor: impl FnMut(usize) -> f64) -> SceneFile {
+    let mut s = scene.clone();
+    for m in &mut s.sensor.beam_modes {
+        m.frequency_hz *= factor(0);
+        m.damping_ratio *= factor(1);
+        m.gain *= factor(2);
+    }
+    if let Some(a) = &mut s.sensor.accelerometer {
+        a.frequency_hz *= factor(0);
+        a.damping_ratio *= factor(1);
+    }
+    s
 }
 
 /// The tolerance the kernel is told its chain has: the scene's `chain_tolerance`, or the
@@ -60,20 +68,11 @@ pub fn chain_tolerance(scene: &SceneFile) -> [f64; 3] {
 /// uniformly in `+-` its [`chain_tolerance`] from a ChaCha8 generator seeded with `seed`
 /// (the errors the kernel's widening takes as its noise: `coalshock::chain_bias`).
 pub fn drawn_chain(scene: &SceneFile, seed: u64) -> SceneFile {
-    let [tf, td, tg] = chain_tolerance(scene);
+    let tolerance = chain_tolerance(scene);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut e = |t: f64| 1.0 + t * (2.0 * rng.random::<f64>() - 1.0);
-    let mut s = scene.clone();
-    for m in &mut s.sensor.beam_modes {
-        m.frequency_hz *= e(tf);
-        m.damping_ratio *= e(td);
-        m.gain *= e(tg);
-    }
-    if let Some(a) = &mut s.sensor.accelerometer {
-        a.frequency_hz *= e(tf);
-        a.damping_ratio *= e(td);
-    }
-    s
+    scaled_chain(scene, |parameter| {
+        1.0 + tolerance[parameter] * (2.0 * rng.random::<f64>() - 1.0)
+    })
 }
 
 #[cfg(test)]
