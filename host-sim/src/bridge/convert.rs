@@ -214,21 +214,61 @@ pub fn scene_to_kernel(scene: &SceneFile) -> Result<Scene, ConvertError> {
 pub fn scene_to_kernel_in<const N: usize, M: Backend>(
     scene: &SceneFile,
 ) -> Result<Scene<N, M>, ConvertError> {
-    if scene.classes.len() > N {
+    // Checked before the parts, whose calibration may run the integrator.
+    within_capacity::<N>(scene.classes.len())?;
+    KernelParts::of(scene)?.scene_in::<N, M>(&scene.sensor)
+}
+
+/// `Err(TooManyClasses)` unless `classes <= N`.
+fn within_capacity<const N: usize>(classes: usize) -> Result<(), ConvertError> {
+    if classes > N {
         return Err(ConvertError::TooManyClasses {
-            classes: scene.classes.len(),
+            classes,
             capacity: N,
         });
     }
-    let classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
-    Scene::with_ratio_maps(
-        material_to_kernel(&scene.plate.material()),
-        &classes,
-        &ratio_maps_to_kernel(scene)?,
-        sensor_to_kernel_in::<M>(&scene.sensor)?,
-        calibrated_settings(scene)?,
-    )
-    .map_err(ConvertError::Kernel)
+    Ok(())
+}
+
+/// What a kernel scene takes from its scene file besides the sensor chain: the plate, the
+/// classes, their ratio maps and the calibrated settings. Building them may run the
+/// integrator ([`calibrated_settings`], [`ratio_maps_to_kernel`]); a study that gives the
+/// kernel several chains for one scene builds them once.
+#[derive(Debug, Clone)]
+pub struct KernelParts {
+    plate: Material,
+    classes: Vec<ParticleClass>,
+    ratio_maps: Vec<Option<RatioMap>>,
+    settings: Settings,
+}
+
+impl KernelParts {
+    /// The parts of `scene`.
+    pub fn of(scene: &SceneFile) -> Result<Self, ConvertError> {
+        Ok(Self {
+            plate: material_to_kernel(&scene.plate.material()),
+            classes: scene.classes.iter().map(class_to_kernel).collect(),
+            ratio_maps: ratio_maps_to_kernel(scene)?,
+            settings: calibrated_settings(scene)?,
+        })
+    }
+
+    /// The kernel scene of these parts behind the chain `sensor`, with capacity `N` and math
+    /// backend `M`, via `Scene::with_ratio_maps`.
+    pub fn scene_in<const N: usize, M: Backend>(
+        &self,
+        sensor: &SensorSpec,
+    ) -> Result<Scene<N, M>, ConvertError> {
+        within_capacity::<N>(self.classes.len())?;
+        Scene::with_ratio_maps(
+            self.plate,
+            &self.classes,
+            &self.ratio_maps,
+            sensor_to_kernel_in::<M>(sensor)?,
+            self.settings,
+        )
+        .map_err(ConvertError::Kernel)
+    }
 }
 
 /// The kernel settings of a scene file: [`settings_to_kernel`], and for a damped contact

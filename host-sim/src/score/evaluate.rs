@@ -91,9 +91,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use crate::bridge::convert::{
-    measurement_from_kernel, scene_to_kernel_in, separability_from_kernel,
-};
+use crate::bridge::convert::{KernelParts, measurement_from_kernel, separability_from_kernel};
 use crate::physics::hertz64::HertzImpact64;
 use crate::scene::SceneFile;
 pub use crate::score::bayes::class_models;
@@ -650,13 +648,21 @@ struct Replayed {
     kernel_seconds: f64,
 }
 
+/// The kernel scene the streams are replayed through, and the parts it was built from (for a
+/// stream given a chain of its own, `chain_drawn`).
+#[derive(Clone, Copy)]
+struct KernelOf<'a, const N: usize, M: Backend> {
+    scene: &'a Scene<N, M>,
+    parts: &'a KernelParts,
+}
+
 /// Phase 3: `n_per_class` impacts of each class in streams of at most `impacts_per_stream`,
 /// each with its own seed, simulated and replayed on every core and folded in order
 /// (`progress(done, total)` after each stream).
 fn replay_streams<const N: usize, M: Backend + Send + Sync>(
     scene: &SceneFile,
     opts: &EvalOptions,
-    kernel_scene: &Scene<N, M>,
+    kernel: KernelOf<'_, N, M>,
     models: &[ClassModel],
     tolerance: u64,
     progress: &mut dyn FnMut(usize, usize),
@@ -675,10 +681,12 @@ fn replay_streams<const N: usize, M: Backend + Send + Sync>(
     let run_job = |_: usize, job: &StreamJob| -> Result<ChunkResult, EvalError> {
         if opts.chain_drawn {
             let seed = stream_seed(opts.seed ^ CHAIN_DRAW_SEED, job.class, job.chunk);
-            let drawn = scene_to_kernel_in::<N, M>(&drawn_chain(scene, seed))?;
+            let drawn = kernel
+                .parts
+                .scene_in::<N, M>(&drawn_chain(scene, seed).sensor)?;
             return run_stream::<N, M>(scene, opts, &drawn, models, tolerance, job);
         }
-        run_stream::<N, M>(scene, opts, kernel_scene, models, tolerance, job)
+        run_stream::<N, M>(scene, opts, kernel.scene, models, tolerance, job)
     };
     let mut all = Replayed {
         outcomes: Vec::with_capacity(total),
@@ -835,12 +843,16 @@ fn run<const N: usize, M: Backend + Send + Sync>(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Evaluation, EvalError> {
     validate_options(opts)?;
-    let m = &opts.chain_mismatch;
-    let kernel_scene = scene_to_kernel_in::<N, M>(&m.applied_to(scene))?;
+    let told = opts.chain_mismatch.applied_to(scene);
+    let parts = KernelParts::of(&told)?;
+    let kernel_scene = parts.scene_in::<N, M>(&told.sensor)?;
     let models = class_models(scene);
     let tolerance = match_tolerance(scene, opts)?;
-    let replayed =
-        replay_streams::<N, M>(scene, opts, &kernel_scene, &models, tolerance, progress)?;
+    let kernel = KernelOf {
+        scene: &kernel_scene,
+        parts: &parts,
+    };
+    let replayed = replay_streams::<N, M>(scene, opts, kernel, &models, tolerance, progress)?;
     // 4. Noise, the Bayes limit (independent Monte Carlo draws) and the reference limit.
     let k = scene.classes.len();
     let noise = estimate_noise(&replayed.outcomes, k + 2);
