@@ -11,7 +11,8 @@
 //! 4. [`bridge`]: the contact calibration and the conversion to the kernel's f32 scene;
 //! 5. [`score`]: the kernel scored on simulated impacts against its limits;
 //! 6. [`report`]: tables, CSV files and plots;
-//! 7. [`cli`]: the command lines of `impact` and `caving` (the binary, `main.rs`, holds the rest).
+//! 7. [`cli`]: the command-line flags, the only layer that knows clap (the binary, `main.rs`,
+//!    holds those of `stream` and `identify`).
 //!
 //! Every module is also reachable at the crate's root (`host_sim::hertz64`), as before the
 //! layers were drawn.
@@ -25,7 +26,10 @@ pub mod score;
 pub mod sim;
 
 pub use bridge::{calibrate, convert, ratio_table};
-pub use cli::{caving_cli, impact_cli};
+pub use cli::{
+    caving_cli, evaluate_cli, export_cli, impact_cli, paper_cli, plasticity_cli, speed_cli,
+    tradeoff_cli,
+};
 pub use physics::{
     hertz64, impact, integrate, integrator_cases, law_spec, laws, sim_error, thornton,
 };

@@ -44,7 +44,7 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Reproduce the paper: Table 3 and the force and compression curves (CSV + SVG).
-    Paper(host_sim::paper::PaperArgs),
+    Paper(host_sim::paper_cli::PaperArgs),
     /// Simulate one impact (or a batch of impacts) and print peak force, duration, restitution.
     Impact(host_sim::impact_cli::ImpactArgs),
     /// Generate a labelled sample stream: OUT.bin (little-endian i16) and OUT.truth.csv.
@@ -52,10 +52,10 @@ enum Command {
     /// Evaluate the kernel on N impacts per class: confusion matrix, forced-choice accuracy,
     /// coverage, confident errors, reliability of its posteriors, against the reference limit
     /// and the oracle.
-    Evaluate(host_sim::evaluate::EvaluateArgs),
+    Evaluate(host_sim::evaluate_cli::EvaluateArgs),
     /// Measure what each knob buys and costs (math backend, separability grid, integrator,
     /// sample rate): a markdown table, CSV files and SVG Pareto plots.
-    Tradeoff(host_sim::tradeoff::TradeoffArgs),
+    Tradeoff(host_sim::tradeoff_cli::TradeoffArgs),
     /// Simulate caving rounds: the gangue share steps or ramps up, the kernel's flow monitor
     /// closes the window; delays, false alarms, recovery and gangue content.
     Caving(host_sim::caving_cli::CavingArgs),
@@ -64,13 +64,13 @@ enum Command {
     Identify(IdentifyArgs),
     /// Write a scene file as Rust source that a firmware includes: a function that builds the
     /// kernel scene exactly as host-sim does (exact f32 literals).
-    Export(host_sim::export::ExportArgs),
+    Export(host_sim::export_cli::ExportArgs),
     /// Peak force, contact time and restitution against speed for a scene's yielding classes,
     /// elastic against yielding (table, CSV and SVG).
-    Plasticity(host_sim::plasticity::PlasticityArgs),
+    Plasticity(host_sim::plasticity_cli::PlasticityArgs),
     /// Measure host-sim's speed on this machine: integrator impacts/s (Hertz, Adams) and the
     /// wall time of an end-to-end evaluation of N impacts.
-    Speed(host_sim::speed::SpeedArgs),
+    Speed(host_sim::speed_cli::SpeedArgs),
 }
 
 /// Flags of `host-sim identify`.
@@ -294,22 +294,22 @@ fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) {
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match &cli.command {
-        Command::Paper(args) => host_sim::paper::run(args),
+        Command::Paper(args) => host_sim::paper::run(&args.config(), &args.out),
         Command::Impact(args) => host_sim::impact_cli::run(args),
         Command::Stream(args) => run_stream(args),
         Command::Evaluate(args) => run_evaluate(args),
-        Command::Tradeoff(args) => host_sim::tradeoff::run(args),
+        Command::Tradeoff(args) => host_sim::tradeoff::run(&args.options()),
         Command::Identify(args) => run_identify(args),
-        Command::Export(args) => host_sim::export::run(args),
+        Command::Export(args) => host_sim::export::run(&args.scene, args.out.as_deref()),
         Command::Caving(args) => host_sim::caving_cli::run_cli(args),
-        Command::Plasticity(args) => host_sim::plasticity::run(args),
-        Command::Speed(args) => host_sim::speed::run(args),
+        Command::Plasticity(args) => host_sim::plasticity::run(&args.options()),
+        Command::Speed(args) => host_sim::speed::run(&args.options()),
     }
 }
 
 /// `host-sim evaluate`: tables on stdout (or one JSON object with `--json`), progress on a
 /// terminal's stderr.
-fn run_evaluate(args: &host_sim::evaluate::EvaluateArgs) -> Result<()> {
+fn run_evaluate(args: &host_sim::evaluate_cli::EvaluateArgs) -> Result<()> {
     let scene = scene::load(&args.scene)?;
     report_saturation(&scene);
     let bar = ProgressBar::new(0);

@@ -5,9 +5,8 @@
 use std::path::PathBuf;
 
 use host_sim::paper::{
-    CSV_FILES, PAPER_K_COAL, PAPER_K_SANDSTONE, PAPER_RADII_M, PaperArgs, PaperConfig,
-    PaperResults, SVG_FILES, SWEEP_COLUMNS, TABLE3_COLUMNS, compute, render_report, write_csvs,
-    write_svgs,
+    CSV_FILES, PAPER_K_COAL, PAPER_K_SANDSTONE, PAPER_RADII_M, PaperConfig, PaperResults,
+    SVG_FILES, SWEEP_COLUMNS, TABLE3_COLUMNS, compute, render_report, write_csvs, write_svgs,
 };
 
 fn results() -> PaperResults {
@@ -156,13 +155,10 @@ fn svg_figures_are_well_formed() {
 #[test]
 fn run_writes_every_file() {
     let dir = temp_dir("run");
-    let args = PaperArgs {
-        out: dir.join("nested"),
-        ..PaperArgs::default()
-    };
-    host_sim::paper::run(&args).expect("paper run");
+    let out = dir.join("nested");
+    host_sim::paper::run(&PaperConfig::default(), &out).expect("paper run");
     for f in CSV_FILES.iter().chain(&SVG_FILES) {
-        assert!(args.out.join(f).is_file(), "{f}");
+        assert!(out.join(f).is_file(), "{f}");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -171,13 +167,13 @@ fn run_writes_every_file() {
 fn bad_arguments_are_errors() {
     let dir = temp_dir("bad");
     for (restitution, depth) in [(0.0, 1e-5), (1.0, 1e-5), (f64::NAN, 1e-5), (0.5, -1e-5)] {
-        let args = PaperArgs {
-            out: dir.clone(),
+        let cfg = PaperConfig {
             restitution,
-            depth,
+            depth_m: depth,
+            ..PaperConfig::default()
         };
         assert!(
-            host_sim::paper::run(&args).is_err(),
+            host_sim::paper::run(&cfg, &dir).is_err(),
             "e {restitution} d {depth}"
         );
     }

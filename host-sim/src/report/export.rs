@@ -11,10 +11,9 @@
 //! `fw/stream.sh --check` fails unless they are reproduced byte for byte.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::Path;
 
 use anyhow::{Context, Result};
-use clap::Args;
 use coalshock::ratio_map::RatioMap;
 use coalshock::{
     Accelerometer, BeamMode, ChainTolerance, ContactCalibration, Material, ParticleClass, Range,
@@ -27,32 +26,22 @@ use crate::bridge::convert::{
 };
 use crate::scene::SceneFile;
 
-/// Flags of `host-sim export`.
-#[derive(Debug, Clone, Args)]
-pub struct ExportArgs {
-    /// Scene file (TOML).
-    #[arg(long)]
-    pub scene: PathBuf,
-    /// Output Rust file (default: standard output).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-}
-
-/// `host-sim export`: reads the scene, writes the source.
-pub fn run(args: &ExportArgs) -> Result<()> {
-    let scene = crate::scene::load(&args.scene)?;
+/// `host-sim export`: reads the scene file `scene_path`, writes the source to `out` (standard
+/// output when `None`).
+pub fn run(scene_path: &Path, out: Option<&Path>) -> Result<()> {
+    let scene = crate::scene::load(scene_path)?;
     // The path as given when relative (the project's own `scenes/...`), else its file name:
     // the header names no directory of the machine it was made on.
-    let shown = if args.scene.is_relative() {
-        args.scene.display().to_string()
+    let shown = if scene_path.is_relative() {
+        scene_path.display().to_string()
     } else {
-        args.scene
+        scene_path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
     };
     let text = scene_source(&scene, &shown)
-        .with_context(|| format!("exporting the scene {}", args.scene.display()))?;
-    match &args.out {
+        .with_context(|| format!("exporting the scene {}", scene_path.display()))?;
+    match out {
         Some(out) => {
             std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?
         }

@@ -13,8 +13,6 @@
 //!   the sphere's bar-wave speed `c0 = sqrt(E / rho)` (coal of the paper: 1960 m/s, so
 //!   19.6 m/s) the warning says so.
 
-use clap::ValueEnum;
-
 use crate::physics::hertz64::{
     HertzImpact64, Material64, effective_modulus_pa, hertz_stiffness, sphere_mass_kg,
 };
@@ -81,27 +79,37 @@ pub const MAX_PENETRATION_RATIO: f64 = 0.08;
 /// impact is warned about (see the module docs).
 pub const MAX_WAVE_SPEED_SHARE: f64 = 0.01;
 
-/// Contact force law (see [`crate::physics::laws`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+/// Contact force law (see [`crate::physics::laws`]); its force in [`LawName::about`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LawName {
-    /// Undamped Hertz `F = k delta^1.5`.
+    /// Undamped Hertz.
     Hertz,
-    /// MSC Adams IMPACT `F = max(0, k delta^1.5 + STEP(delta, 0, 0, d, c_max) delta')`, with
-    /// `c_max` given or found for `restitution`.
+    /// MSC Adams IMPACT.
     Adams,
-    /// Hunt-Crossley `F = k delta^1.5 (1 + chi delta'/u)`, `chi = 3 (1 - e)/2`.
+    /// Hunt-Crossley.
     HuntCrossley,
-    /// Lankarani-Nikravesh, `chi = 3 (1 - e^2)/4`.
+    /// Lankarani-Nikravesh.
     LankaraniNikravesh,
-    /// Flores et al., `chi = 8 (1 - e)/(5 e)`.
+    /// Flores et al.
     Flores,
-    /// Gonthier et al., `chi = (1 - e^2)/e`.
+    /// Gonthier et al.
     Gonthier,
-    /// Tsuji / Hertz-Mindlin DEM damping with `beta(e)`.
+    /// Tsuji / Hertz-Mindlin DEM damping.
     Tsuji,
 }
 
 impl LawName {
+    /// Every law, in the order the help lists them.
+    pub const ALL: [Self; 7] = [
+        Self::Hertz,
+        Self::Adams,
+        Self::HuntCrossley,
+        Self::LankaraniNikravesh,
+        Self::Flores,
+        Self::Gonthier,
+        Self::Tsuji,
+    ];
+
     /// The name as written on the command line and in CSV.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -115,28 +123,52 @@ impl LawName {
         }
     }
 
+    /// The law's force, as the help shows it.
+    pub fn about(self) -> &'static str {
+        match self {
+            Self::Hertz => "Undamped Hertz `F = k delta^1.5`",
+            Self::Adams => {
+                "MSC Adams IMPACT `F = max(0, k delta^1.5 + STEP(delta, 0, 0, d, c_max) delta')`, \
+                 with `c_max` given or found for `restitution`"
+            }
+            Self::HuntCrossley => {
+                "Hunt-Crossley `F = k delta^1.5 (1 + chi delta'/u)`, `chi = 3 (1 - e)/2`"
+            }
+            Self::LankaraniNikravesh => "Lankarani-Nikravesh, `chi = 3 (1 - e^2)/4`",
+            Self::Flores => "Flores et al., `chi = 8 (1 - e)/(5 e)`",
+            Self::Gonthier => "Gonthier et al., `chi = (1 - e^2)/e`",
+            Self::Tsuji => "Tsuji / Hertz-Mindlin DEM damping with `beta(e)`",
+        }
+    }
+
     /// Parses a name (case-insensitive, `_` for `-` allowed).
     pub fn parse(s: &str) -> Result<Self, String> {
         let norm = s.trim().to_ascii_lowercase().replace('_', "-");
-        <Self as ValueEnum>::from_str(&norm, true).map_err(|_| {
-            format!(
-                "unknown law {s:?}: expected hertz, adams, hunt-crossley, lankarani-nikravesh, \
-                 flores, gonthier or tsuji"
-            )
-        })
+        Self::ALL
+            .into_iter()
+            .find(|l| l.as_str() == norm)
+            .ok_or_else(|| {
+                format!(
+                    "unknown law {s:?}: expected hertz, adams, hunt-crossley, \
+                     lankarani-nikravesh, flores, gonthier or tsuji"
+                )
+            })
     }
 }
 
 /// Integration method (see [`crate::physics::integrate::Method`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MethodName {
-    /// Adaptive Dormand-Prince 5(4) with tolerance `tol`.
+    /// Adaptive Dormand-Prince 5(4).
     Dopri5,
-    /// Fixed-step RK4 with `steps_per_tc` steps per Hertz contact time.
+    /// Fixed-step RK4.
     Rk4,
 }
 
 impl MethodName {
+    /// Every method, in the order the help lists them.
+    pub const ALL: [Self; 2] = [Self::Dopri5, Self::Rk4];
+
     /// The name as written on the command line and in CSV.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -145,10 +177,21 @@ impl MethodName {
         }
     }
 
+    /// The method and its input, as the help shows it.
+    pub fn about(self) -> &'static str {
+        match self {
+            Self::Dopri5 => "Adaptive Dormand-Prince 5(4) with tolerance `tol`",
+            Self::Rk4 => "Fixed-step RK4 with `steps_per_tc` steps per Hertz contact time",
+        }
+    }
+
     /// Parses a name (case-insensitive).
     pub fn parse(s: &str) -> Result<Self, String> {
-        <Self as ValueEnum>::from_str(s.trim(), true)
-            .map_err(|_| format!("unknown method {s:?}: expected dopri5 or rk4"))
+        let norm = s.trim().to_ascii_lowercase();
+        Self::ALL
+            .into_iter()
+            .find(|m| m.as_str() == norm)
+            .ok_or_else(|| format!("unknown method {s:?}: expected dopri5 or rk4"))
     }
 }
 

@@ -91,32 +91,6 @@ pub const SVG_FILES: [&str; 4] = [
 /// The CSV files written.
 pub const CSV_FILES: [&str; 3] = ["table3.csv", "vs_speed.csv", "vs_radius.csv"];
 
-/// Flags of `host-sim paper`.
-#[derive(Debug, Clone, PartialEq, clap::Args)]
-pub struct PaperArgs {
-    /// Directory for the CSV series and SVG figures (created if missing).
-    #[arg(long, default_value = "out/paper")]
-    pub out: PathBuf,
-    /// Coefficient of restitution in (0, 1) the damped (Adams IMPACT) contact is calibrated
-    /// to at the reference speed 1 m/s, per material and radius.
-    #[arg(long, default_value_t = 0.5)]
-    pub restitution: f64,
-    /// Adams IMPACT penetration `d` in m over which the damping ramps up to `c_max`.
-    #[arg(long, default_value = "1e-5")]
-    pub depth: f64,
-}
-
-impl Default for PaperArgs {
-    /// The clap defaults: `out/paper`, e = 0.5, d = 1e-5 m.
-    fn default() -> Self {
-        Self {
-            out: PathBuf::from("out/paper"),
-            restitution: 0.5,
-            depth: 1e-5,
-        }
-    }
-}
-
 /// What to compute.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PaperConfig {
@@ -142,17 +116,6 @@ impl Default for PaperConfig {
             speeds_m_s: (0..=40).map(|i| f64::from(10 + i) / 10.0).collect(),
             radii_m: (0..=25).map(|i| f64::from(15 + i) / 1000.0).collect(),
             tolerance: Tolerance::new(1e-10),
-        }
-    }
-}
-
-impl PaperConfig {
-    /// The default grids with the restitution and depth of `args`.
-    pub fn from_args(args: &PaperArgs) -> Self {
-        Self {
-            restitution: args.restitution,
-            depth_m: args.depth,
-            ..Self::default()
         }
     }
 }
@@ -1144,14 +1107,13 @@ pub fn write_svgs(res: &PaperResults, dir: &Path) -> anyhow::Result<Vec<PathBuf>
 }
 
 /// `host-sim paper`: computes everything, prints [`render_report`], and writes the CSV and
-/// SVG files into `args.out` (created if missing), listing them at the end.
-pub fn run(args: &PaperArgs) -> anyhow::Result<()> {
-    let res = compute(&PaperConfig::from_args(args))?;
+/// SVG files into `out` (created if missing), listing them at the end.
+pub fn run(cfg: &PaperConfig, out: &Path) -> anyhow::Result<()> {
+    let res = compute(cfg)?;
     print!("{}", render_report(&res));
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut files = write_csvs(&res, &args.out)?;
-    files.extend(write_svgs(&res, &args.out)?);
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let mut files = write_csvs(&res, out)?;
+    files.extend(write_svgs(&res, out)?);
     print_written(&files);
     Ok(())
 }
@@ -1197,17 +1159,5 @@ mod tests {
         assert!(compute(&cfg).is_err());
         cfg.speeds_m_s = vec![1.0, -2.0];
         assert!(compute(&cfg).is_err());
-    }
-
-    #[test]
-    fn clap_defaults_match_default() {
-        use clap::Parser;
-        #[derive(Parser)]
-        struct Cli {
-            #[command(flatten)]
-            args: PaperArgs,
-        }
-        let cli = Cli::try_parse_from(["paper"]).expect("defaults parse");
-        assert_eq!(cli.args, PaperArgs::default());
     }
 }

@@ -27,28 +27,37 @@ pub const SVG_FILES: [&str; 3] = [
 /// The CSV file written.
 pub const CSV_FILE: &str = "yield_vs_speed.csv";
 
-/// Flags of `host-sim plasticity`.
-#[derive(Debug, Clone, PartialEq, clap::Args)]
-pub struct PlasticityArgs {
+/// What `host-sim plasticity` draws and where it writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlasticityOptions {
     /// Scene file; its classes that state `yield_pressure_pa` are drawn.
-    #[arg(long, default_value = "scenes/paper_yield.toml")]
     pub scene: PathBuf,
     /// Directory for the CSV series and SVG figures (created if missing).
-    #[arg(long, default_value = "out/plasticity")]
     pub out: PathBuf,
-    /// Sphere radius in m (default: each class's geometric centre).
-    #[arg(long)]
-    pub radius: Option<f64>,
+    /// Sphere radius in m (`None`: each class's geometric centre).
+    pub radius_m: Option<f64>,
     /// Speeds per class, evenly spaced over its speed range (at least 2).
-    #[arg(long, default_value_t = 41)]
     pub points: usize,
     /// Draws per class of the noiseless Bayes limit, yielding and elastic (0: skip it; needs
     /// an undamped scene).
-    #[arg(long, default_value_t = 20000)]
     pub bayes_draws: usize,
     /// Seed of the Bayes limit's draws.
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
+}
+
+impl Default for PlasticityOptions {
+    /// `scenes/paper_yield.toml` into `out/plasticity`, each class's centre radius, 41 speeds,
+    /// 20 000 Bayes draws per class, seed 1.
+    fn default() -> Self {
+        Self {
+            scene: PathBuf::from("scenes/paper_yield.toml"),
+            out: PathBuf::from("out/plasticity"),
+            radius_m: None,
+            points: 41,
+            bayes_draws: 20_000,
+            seed: 1,
+        }
+    }
 }
 
 /// One point of a class's sweep (SI units).
@@ -290,9 +299,9 @@ fn print_bayes(scene: &SceneFile, draws: usize, seed: u64) -> anyhow::Result<()>
 
 /// `host-sim plasticity`: the sweep of every yielding class, printed as a table and written
 /// as [`CSV_FILE`] and [`SVG_FILES`] into `args.out`.
-pub fn run(args: &PlasticityArgs) -> anyhow::Result<()> {
+pub fn run(args: &PlasticityOptions) -> anyhow::Result<()> {
     let scene = scene::load(&args.scene)?;
-    let rows = sweep(&scene, args.radius, args.points)?;
+    let rows = sweep(&scene, args.radius_m, args.points)?;
     println!("class  R (m)  u (m/s)  F_Hertz (N)  F_yield (N)  t_Hertz (us)  t_yield (us)  e");
     let every = ((args.points - 1) / 4).max(1);
     for (_, r) in rows

@@ -23,25 +23,33 @@ use crate::physics::integrator_cases::{MethodCase, bench_ladder, paper_problems,
 use crate::scene::{self, SceneFile};
 use crate::score::evaluate::{EvalOptions, evaluate};
 
-/// Flags of `host-sim speed`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct SpeedArgs {
+/// What `host-sim speed` measures and how it prints.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpeedOptions {
     /// Impacts of the timed evaluation, split evenly over the scene's classes.
-    #[arg(long, default_value_t = 1_000_000)]
     pub impacts: usize,
-    /// Scene of the timed evaluation (TOML; default: the built-in paper scene, equal to
+    /// Scene of the timed evaluation (`None`: the built-in paper scene, equal to
     /// `scenes/paper.toml`).
-    #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Measuring time of the integrator per law and method in s.
-    #[arg(long, default_value_t = 0.5)]
     pub integrator_seconds: f64,
     /// Also time the evaluation on one thread (the parallel speed-up).
-    #[arg(long)]
     pub one_thread: bool,
     /// Print one JSON object instead of a table.
-    #[arg(long)]
     pub json: bool,
+}
+
+impl Default for SpeedOptions {
+    /// 10^6 impacts of the paper scene, 0.5 s per integrator, on every core only, a table.
+    fn default() -> Self {
+        Self {
+            impacts: 1_000_000,
+            scene: None,
+            integrator_seconds: 0.5,
+            one_thread: false,
+            json: false,
+        }
+    }
 }
 
 /// Throughput of the integrator on one contact problem.
@@ -156,7 +164,7 @@ fn evaluate_speed(
 }
 
 /// Measures everything (see the module docs).
-pub fn measure(args: &SpeedArgs) -> Result<SpeedReport> {
+pub fn measure(args: &SpeedOptions) -> Result<SpeedReport> {
     if args.impacts == 0 {
         return Err(anyhow!("--impacts must be at least 1"));
     }
@@ -242,7 +250,7 @@ pub fn render(r: &SpeedReport) -> String {
 }
 
 /// `host-sim speed`.
-pub fn run(args: &SpeedArgs) -> Result<()> {
+pub fn run(args: &SpeedOptions) -> Result<()> {
     let r = measure(args)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&r)?);

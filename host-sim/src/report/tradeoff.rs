@@ -37,7 +37,7 @@ pub mod table;
 
 pub use config::{
     BLOCK_SAMPLES, FIRMWARE_SAMPLE_RATE_HZ, METRICS_CSV, PARETO_CSV, SVG_FILES, TABLE_MD,
-    TradeoffArgs, TradeoffConfig,
+    TradeoffConfig, TradeoffOptions,
 };
 pub use firmware::{FirmwareFigures, M4Figures, m4_instructions_per_second};
 pub use measure::{closed_form_errors, integrator_problems, reference_separability};
@@ -103,7 +103,7 @@ pub fn compute(cfg: &TradeoffConfig, fw: FirmwareFigures) -> Result<Tradeoff> {
 
 /// `host-sim tradeoff`: measures (full or quick), prints the table and the run time, writes
 /// the files into `args.out` and lists them.
-pub fn run(args: &TradeoffArgs) -> Result<()> {
+pub fn run(args: &TradeoffOptions) -> Result<()> {
     let cfg = if args.quick {
         TradeoffConfig::quick(args.seed)
     } else {

@@ -80,13 +80,34 @@ fn opt_err(field: &'static str, problem: impl Into<String>) -> CavingError {
 }
 
 /// How the gangue share rises when the boundary arrives.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Profile {
-    /// From `pi0` to `pi1` at once.
+    /// A step ([`Profile::about`]).
     Step,
-    /// Linearly from `pi0` to `pi1` over `ramp_impacts` impacts.
+    /// A linear ramp ([`Profile::about`]).
     Ramp,
+}
+
+impl Profile {
+    /// Both profiles, in the order the help lists them.
+    pub const ALL: [Self; 2] = [Self::Step, Self::Ramp];
+
+    /// The name as written on the command line and in the scene's `[caving]` table.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Step => "step",
+            Self::Ramp => "ramp",
+        }
+    }
+
+    /// What the share does, as the help shows it.
+    pub fn about(self) -> &'static str {
+        match self {
+            Self::Step => "From `pi0` to `pi1` at once",
+            Self::Ramp => "Linearly from `pi0` to `pi1` over `ramp_impacts` impacts",
+        }
+    }
 }
 
 /// The `[caving]` table a scene file may carry: the change of its caving rounds (every key

@@ -81,7 +81,6 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::Instant;
 
 use coalshock::math::Backend;
@@ -412,10 +411,9 @@ pub struct Evaluation {
 }
 
 /// The kernel's math backend for [`evaluate_backend`] (the CLI's `--backend`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BackendChoice {
-    /// The kernel's default (`coalshock::math::DefaultBackend`: libm, or micromath with the
-    /// kernel's `micromath` feature).
+    /// The kernel's default ([`BackendChoice::about`]).
     #[default]
     Default,
     /// `libm`.
@@ -424,72 +422,28 @@ pub enum BackendChoice {
     Micromath,
 }
 
-/// Flags of `host-sim evaluate`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct EvaluateArgs {
-    /// Scene file (TOML).
-    #[arg(long)]
-    pub scene: PathBuf,
-    /// Impacts per class (1 to 10^7).
-    #[arg(long, value_parser = crate::score::counts::impacts_per_class)]
-    pub n: usize,
-    /// Seed of every random draw.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Print one JSON object instead of tables.
-    #[arg(long)]
-    pub json: bool,
-    /// The kernel's math backend.
-    #[arg(long, value_enum, default_value_t = BackendChoice::Default)]
-    pub backend: BackendChoice,
-    /// Monte Carlo draws per class of the diagnostic Bayes limit at the kernel's noise (1 to
-    /// 10^8).
-    #[arg(long, default_value_t = DEFAULT_BAYES_DRAWS_PER_CLASS,
-          value_parser = crate::score::counts::bayes_draws_per_class)]
-    pub bayes_draws: usize,
-    /// Monte Carlo draws per class of the reference limit.
-    #[arg(long, default_value_t = crate::score::reference::DEFAULT_DRAWS_PER_CLASS)]
-    pub reference_draws: usize,
-    /// The share of class verdicts allowed to be wrong, in (0, 0.5) (default: the scene
-    /// file's `settings.confident_error_rate`, else 0.01).
-    #[arg(long)]
-    pub confident_error_rate: Option<f64>,
-    /// Relative error of every chain frequency the kernel is given (0.02: 2 % high); the
-    /// simulation keeps the scene's.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub chain_frequency_error: f64,
-    /// Relative error of every chain damping ratio the kernel is given (-0.3: 30 % low).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub chain_damping_error: f64,
-    /// Relative error of every beam mode gain the kernel is given (0.2: 20 % high).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub chain_gain_error: f64,
-    /// Give each stream's kernel the chain as one node might have identified it: every
-    /// stage's frequency, damping and gain off by errors drawn uniformly within the scene's
-    /// chain tolerance (checks that the posteriors it widens are calibrated).
-    #[arg(long)]
-    pub chain_drawn: bool,
-}
+impl BackendChoice {
+    /// Every backend, in the order the help lists them.
+    pub const ALL: [Self; 3] = [Self::Default, Self::Libm, Self::Micromath];
 
-impl EvaluateArgs {
-    /// The options these flags give.
-    pub fn options(&self) -> EvalOptions {
-        EvalOptions {
-            n_per_class: self.n,
-            seed: self.seed,
-            bayes_draws_per_class: self.bayes_draws,
-            chain_mismatch: ChainMismatch {
-                frequency: self.chain_frequency_error,
-                damping: self.chain_damping_error,
-                gain: self.chain_gain_error,
-            },
-            reference: ReferenceOptions {
-                draws_per_class: self.reference_draws,
-                ..ReferenceOptions::default()
-            },
-            confident_error_rate: self.confident_error_rate,
-            chain_drawn: self.chain_drawn,
-            ..EvalOptions::default()
+    /// The name as written on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Default => "default",
+            Self::Libm => "libm",
+            Self::Micromath => "micromath",
+        }
+    }
+
+    /// The backend, as the help shows it.
+    pub fn about(self) -> &'static str {
+        match self {
+            Self::Default => {
+                "The kernel's default (`coalshock::math::DefaultBackend`: libm, or micromath \
+                 with the kernel's `micromath` feature)"
+            }
+            Self::Libm => "`libm`",
+            Self::Micromath => "`micromath`",
         }
     }
 }

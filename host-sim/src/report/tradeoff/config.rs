@@ -1,5 +1,5 @@
-//! `host-sim tradeoff`, its flags and run sizes: the constants of the study, the command's
-//! arguments and the configuration (full or quick) every measurement reads.
+//! `host-sim tradeoff`, its options and run sizes: the constants of the study, the command's
+//! options and the configuration (full or quick) every measurement reads.
 
 use std::path::PathBuf;
 
@@ -31,28 +31,22 @@ pub const SVG_FILES: [&str; 4] = [
     "pareto_sample_rate.svg",
 ];
 
-/// Flags of `host-sim tradeoff`.
-#[derive(Debug, Clone, PartialEq, clap::Args)]
-pub struct TradeoffArgs {
+/// What `host-sim tradeoff` runs and where it writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TradeoffOptions {
     /// Directory for the table, the CSV files and the SVG plots (created if missing).
-    #[arg(long, default_value = "target/tradeoff")]
     pub out: PathBuf,
-    /// A small, fast run (for tests): fewer impacts, grid sizes, tolerances and sample rates.
-    #[arg(long)]
+    /// The small, fast run ([`TradeoffConfig::quick`]) instead of the full one.
     pub quick: bool,
     /// Seed of every random draw (streams, Monte Carlo).
-    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// The firmware check's `measures.txt` (`fw/measure.sh`, run by `bash fw/ci.sh`). Default:
-    /// `$FW_OUT/measures.txt`, else `fw/measures.txt` under the cargo target directory
-    /// (`$CARGO_TARGET_DIR`, the one this binary was built in, or `target/`); the command fails
-    /// when there is none.
-    #[arg(long)]
+    /// The firmware check's `measures.txt`; `None`: where
+    /// [`crate::report::tradeoff::FirmwareFigures::load`] looks for it.
     pub fw_measures: Option<PathBuf>,
 }
 
-impl Default for TradeoffArgs {
-    /// The clap defaults: `target/tradeoff`, full run, seed 1, default firmware figures.
+impl Default for TradeoffOptions {
+    /// `target/tradeoff`, full run, seed 1, the firmware figures where the check leaves them.
     fn default() -> Self {
         Self {
             out: PathBuf::from("target/tradeoff"),
