@@ -16,7 +16,7 @@
 //!                                     # (Thornton); the class's contact then yields
 //!
 //! [contact]
-//! law = "hertz"                       # or hunt_crossley / lankarani_nikravesh / flores /
+//! law = "hertz"                       # (physics::law_spec::LawSpec) or hunt_crossley / lankarani_nikravesh / flores /
 //!                                     # gonthier / tsuji { restitution }, adams { c_max_n_s_m, d_m },
 //!                                     # adams_restitution { restitution, d_m }
 //!
@@ -49,7 +49,6 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::physics::hertz64::Material64;
 use crate::physics::law_spec::LawSpec;
-use crate::physics::laws::RestitutionModel;
 use crate::physics::sim_error::SimError;
 
 /// Longest class name in bytes (the kernel's `coalshock::scene::NAME_LEN`).
@@ -556,113 +555,46 @@ pub fn drop_speed_m_s(height_m: f64) -> f64 {
 // Contact law
 // ---------------------------------------------------------------------------------------------
 
-/// The contact force law the simulation integrates (`[contact]`, tag `law`), mapped onto the
-/// integrator's [`LawSpec`] by [`ContactLaw::law_spec`]. The stiffness is always the Hertz
-/// `k = 4/3 E* sqrt(R)` with exponent 1.5 of the impact being simulated; the contact is
-/// gravity-free (as the kernel's envelopes are).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
-pub enum ContactLaw {
-    /// Undamped Hertz `F = k delta^(3/2)` (restitution 1); the kernel's model.
-    #[default]
-    Hertz,
-    /// Hunt-Crossley `F = k delta^1.5 (1 + chi delta_dot / u)`, `chi = 3 (1 - e) / 2`.
-    HuntCrossley {
-        /// Target coefficient of restitution `e` in (0, 1].
-        restitution: f64,
-    },
-    /// Lankarani-Nikravesh, `chi = 3 (1 - e^2) / 4`.
-    LankaraniNikravesh {
-        /// Target coefficient of restitution `e` in (0, 1].
-        restitution: f64,
-    },
-    /// Flores et al., `chi = 8 (1 - e) / (5 e)`.
-    Flores {
-        /// Target coefficient of restitution `e` in (0, 1].
-        restitution: f64,
-    },
-    /// Gonthier et al., `chi = (1 - e^2) / e`.
-    Gonthier {
-        /// Target coefficient of restitution `e` in (0, 1].
-        restitution: f64,
-    },
-    /// DEM (Tsuji / Hertz-Mindlin) damping with `beta(e)`.
-    Tsuji {
-        /// Target coefficient of restitution `e` in (0, 1].
-        restitution: f64,
-    },
-    /// MSC Adams IMPACT `F = max(0, k delta^1.5 + STEP(delta, 0, 0, d, c_max) delta_dot)`.
-    Adams {
-        /// Full damping `c_max` in N s/m (`>= 0`).
-        c_max_n_s_m: f64,
-        /// Penetration `d` in m over which the damping ramps up (`> 0`; Adams: about 1e-5).
-        d_m: f64,
-    },
-    /// Adams IMPACT with `c_max` solved per impact so that it rebounds with `restitution`
-    /// (one root search per impact: slow).
-    AdamsRestitution {
-        /// Target coefficient of restitution in (0, 1).
-        restitution: f64,
-        /// Penetration `d` in m (`> 0`).
-        d_m: f64,
-    },
-}
-
-impl ContactLaw {
-    /// The integrator's law specification.
-    pub fn law_spec(&self) -> LawSpec {
-        match *self {
-            ContactLaw::Hertz => LawSpec::Hertz,
-            ContactLaw::HuntCrossley { restitution } => LawSpec::HuntCrossley { restitution },
-            ContactLaw::LankaraniNikravesh { restitution } => {
-                LawSpec::LankaraniNikravesh { restitution }
-            }
-            ContactLaw::Flores { restitution } => LawSpec::Flores { restitution },
-            ContactLaw::Gonthier { restitution } => LawSpec::Gonthier { restitution },
-            ContactLaw::Tsuji { restitution } => LawSpec::Tsuji { restitution },
-            ContactLaw::Adams { c_max_n_s_m, d_m } => LawSpec::Adams { c_max_n_s_m, d_m },
-            ContactLaw::AdamsRestitution { restitution, d_m } => {
-                LawSpec::AdamsRestitution { restitution, d_m }
-            }
+/// Checks the parameters of the scene's `[contact]` law, naming the field (`contact.d_m`).
+fn validate_contact(law: &LawSpec) -> Result<(), SceneError> {
+    let e_in = |e: f64, hi_open: bool| {
+        let ok = e.is_finite() && e > 0.0 && if hi_open { e < 1.0 } else { e <= 1.0 };
+        if ok {
+            Ok(())
+        } else {
+            Err(SceneError::invalid(
+                "contact.restitution",
+                format!(
+                    "must be in (0, 1{} (got {e})",
+                    if hi_open { ")" } else { "]" }
+                ),
+            ))
         }
-    }
-
-    fn validate(&self) -> Result<(), SceneError> {
-        let e_in = |e: f64, hi_open: bool| {
-            let ok = e.is_finite() && e > 0.0 && if hi_open { e < 1.0 } else { e <= 1.0 };
-            if ok {
-                Ok(())
-            } else {
-                Err(SceneError::invalid(
-                    "contact.restitution",
-                    format!(
-                        "must be in (0, 1{} (got {e})",
-                        if hi_open { ")" } else { "]" }
-                    ),
-                ))
+    };
+    match *law {
+        LawSpec::Hertz => Ok(()),
+        LawSpec::HuntCrossley { restitution }
+        | LawSpec::LankaraniNikravesh { restitution }
+        | LawSpec::Flores { restitution }
+        | LawSpec::Gonthier { restitution }
+        | LawSpec::Tsuji { restitution } => e_in(restitution, false),
+        LawSpec::Adams { c_max_n_s_m, d_m } => {
+            if !(c_max_n_s_m.is_finite() && c_max_n_s_m >= 0.0) {
+                return Err(SceneError::invalid(
+                    "contact.c_max_n_s_m",
+                    format!("must be finite and >= 0 (got {c_max_n_s_m})"),
+                ));
             }
-        };
-        match *self {
-            ContactLaw::Hertz => Ok(()),
-            ContactLaw::HuntCrossley { restitution }
-            | ContactLaw::LankaraniNikravesh { restitution }
-            | ContactLaw::Flores { restitution }
-            | ContactLaw::Gonthier { restitution }
-            | ContactLaw::Tsuji { restitution } => e_in(restitution, false),
-            ContactLaw::Adams { c_max_n_s_m, d_m } => {
-                if !(c_max_n_s_m.is_finite() && c_max_n_s_m >= 0.0) {
-                    return Err(SceneError::invalid(
-                        "contact.c_max_n_s_m",
-                        format!("must be finite and >= 0 (got {c_max_n_s_m})"),
-                    ));
-                }
-                positive("contact.d_m", d_m)
-            }
-            ContactLaw::AdamsRestitution { restitution, d_m } => {
-                e_in(restitution, true)?;
-                positive("contact.d_m", d_m)
-            }
+            positive("contact.d_m", d_m)
         }
+        LawSpec::AdamsRestitution { restitution, d_m } => {
+            e_in(restitution, true)?;
+            positive("contact.d_m", d_m)
+        }
+        LawSpec::Thornton { .. } => Err(SceneError::invalid(
+            "contact.law",
+            "thornton is not a [contact] law: a class that states yield_pressure_pa yields",
+        )),
     }
 }
 
@@ -932,9 +864,9 @@ pub struct SceneFile {
     pub plate: MaterialSpec,
     /// The particle classes, in the order verdicts index them (2 to [`MAX_CLASSES`]).
     pub classes: Vec<ClassSpec>,
-    /// The contact law of the simulation (default undamped Hertz).
+    /// The contact law of the simulation (`[contact]`, default undamped Hertz).
     #[serde(default)]
-    pub contact: ContactLaw,
+    pub contact: LawSpec,
     /// The sensor chain.
     pub sensor: SensorSpec,
     /// Overrides of the kernel's settings.
@@ -976,7 +908,7 @@ impl SceneFile {
                     speed,
                 ),
             ],
-            contact: ContactLaw::Hertz,
+            contact: LawSpec::Hertz,
             sensor: SensorSpec::rigid(100_000.0, 50.0, 30.0, 4.0, 16),
             settings: SettingsOverrides::default(),
         }
@@ -1027,7 +959,7 @@ impl SceneFile {
                 ));
             }
         }
-        self.contact.validate()?;
+        validate_contact(&self.contact)?;
         for i in 0..self.classes.len() {
             self.class_law(i).map_err(|e| {
                 SceneError::invalid(format!("classes[{i}].yield_pressure_pa"), e.to_string())
@@ -1063,36 +995,24 @@ impl SceneFile {
         Ok(())
     }
 
-    /// The integrator's law for class `class`: the scene's [`ContactLaw`], or, when the class
+    /// The integrator's law for class `class`: the scene's `[contact]` law, or, when the class
     /// states `yield_pressure_pa`, [`LawSpec::Thornton`] with the scene's restitution-law
     /// damping (`None` for `law = "hertz"`). Errors, naming the field, for a yielding class
     /// under a law whose damping is not of the restitution form (Adams, Tsuji).
     pub fn class_law(&self, class: usize) -> Result<LawSpec, SimError> {
         let Some(p_y) = self.classes.get(class).and_then(|c| c.yield_pressure_pa) else {
-            return Ok(self.contact.law_spec());
+            return Ok(self.contact);
         };
-        let damping = match self.contact {
-            ContactLaw::Hertz => None,
-            ContactLaw::HuntCrossley { restitution } => {
-                Some((RestitutionModel::HuntCrossley, restitution))
-            }
-            ContactLaw::LankaraniNikravesh { restitution } => {
-                Some((RestitutionModel::LankaraniNikravesh, restitution))
-            }
-            ContactLaw::Flores { restitution } => Some((RestitutionModel::Flores, restitution)),
-            ContactLaw::Gonthier { restitution } => Some((RestitutionModel::Gonthier, restitution)),
-            ContactLaw::Tsuji { .. }
-            | ContactLaw::Adams { .. }
-            | ContactLaw::AdamsRestitution { .. } => {
-                return Err(SimError::InvalidParameter {
-                    name: format!("classes[{class}].yield_pressure_pa"),
-                    value: p_y,
-                    requirement: "given with contact law hertz, hunt_crossley, \
-                                  lankarani_nikravesh, flores or gonthier (a yielding contact \
-                                  takes only their damping)",
-                });
-            }
-        };
+        let damping = self.contact.restitution_damping();
+        if damping.is_none() && self.contact != LawSpec::Hertz {
+            return Err(SimError::InvalidParameter {
+                name: format!("classes[{class}].yield_pressure_pa"),
+                value: p_y,
+                requirement: "given with contact law hertz, hunt_crossley, \
+                              lankarani_nikravesh, flores or gonthier (a yielding contact \
+                              takes only their damping)",
+            });
+        }
         Ok(LawSpec::Thornton {
             yield_pressure_pa: p_y,
             damping,
@@ -1226,6 +1146,7 @@ fn class_closed_forms_fit(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::laws::RestitutionModel;
 
     #[test]
     fn paper_round_trips_through_toml() {
@@ -1264,7 +1185,7 @@ mod tests {
         assert!(text.contains("yield_pressure_pa"), "{text}");
         assert!(!paper.to_toml_string().expect("serialize").contains("yield"));
         assert_eq!(SceneFile::from_toml_str(&text).expect("parse"), s);
-        s.contact = ContactLaw::Flores { restitution: 0.5 };
+        s.contact = LawSpec::Flores { restitution: 0.5 };
         assert_eq!(
             s.class_law(0).expect("law"),
             LawSpec::Thornton {
@@ -1276,10 +1197,10 @@ mod tests {
             s.class_law(1).expect("law"),
             LawSpec::Flores { restitution: 0.5 }
         );
-        s.contact = ContactLaw::Tsuji { restitution: 0.5 };
+        s.contact = LawSpec::Tsuji { restitution: 0.5 };
         let e = s.validate().expect_err("tsuji").to_string();
         assert!(e.contains("classes[0].yield_pressure_pa"), "{e}");
-        s.contact = ContactLaw::Hertz;
+        s.contact = LawSpec::Hertz;
         s.classes[0].yield_pressure_pa = Some(-1.0);
         let e = s.validate().expect_err("negative").to_string();
         assert!(e.contains("classes[0].yield_pressure_pa"), "{e}");
@@ -1319,7 +1240,7 @@ gain = 0.1
         assert_eq!(s.plate.material(), Material64::CARBON_STEEL);
         assert!(matches!(s.classes[0].speed, SpeedSpec::DropHeight(_)));
         assert_eq!(s.classes[1].prior, 0.25);
-        assert_eq!(s.contact, ContactLaw::Flores { restitution: 0.5 });
+        assert_eq!(s.contact, LawSpec::Flores { restitution: 0.5 });
         assert_eq!(s.sensor.beam_modes.len(), 1);
         assert_eq!(s.sensor.adc_range(), (-2048, 2047));
         let u = s.classes[0].speed_range_m_s();

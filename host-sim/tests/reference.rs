@@ -6,10 +6,11 @@ use host_sim::bayes::{FeatureNoise, bayes_accuracy, class_models};
 use host_sim::calibrate::C_AREA;
 use host_sim::crb::phase_averaged_crb;
 use host_sim::impact::{ImpactSpec, simulate};
+use host_sim::law_spec::LawSpec;
 use host_sim::reference::{
     ClassMap, DurationFeature, ReferenceOptions, class_maps, class_maps_with, reference_accuracy,
 };
-use host_sim::scene::{ContactLaw, SceneFile};
+use host_sim::scene::SceneFile;
 use host_sim::sensor::{ForcePulse, PulseShape, Sensor};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -108,7 +109,7 @@ fn elastic_reference_agrees_with_the_closed_form_bayes_integral() {
 /// The paper's own Adams IMPACT setting: `c_max` fixed at 687.16 N s/m, `d = 0.01 mm`.
 fn adams_scene() -> SceneFile {
     let mut scene = SceneFile::paper();
-    scene.contact = ContactLaw::Adams {
+    scene.contact = LawSpec::Adams {
         c_max_n_s_m: 687.16,
         d_m: 1e-5,
     };
@@ -134,7 +135,7 @@ fn damped_map_follows_the_integrator_and_the_bound_between_grid_points() {
                 x.exp(),
                 y.exp(),
             );
-            spec.law = scene.contact.law_spec();
+            spec.law = scene.contact;
             let hertz = spec.hertz().unwrap();
             let step_s = hertz.duration_s / 512.0;
             spec.record = Some(step_s);
@@ -198,7 +199,7 @@ fn impulse_durations_follow_momentum() {
             let l = map.at(x, y);
             let material = c.material.material();
             let mut spec = ImpactSpec::new(material, scene.plate.material(), x.exp(), y.exp());
-            spec.law = scene.contact.law_spec();
+            spec.law = scene.contact;
             let rep = simulate(&spec).unwrap();
             let mass_kg =
                 4.0 / 3.0 * std::f64::consts::PI * material.density_kg_m3 * x.exp().powi(3);

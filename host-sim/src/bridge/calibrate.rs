@@ -28,7 +28,7 @@ use crate::physics::impact::{ImpactSpec, simulate};
 use crate::physics::integrate::SimError;
 use crate::physics::law_spec::LawSpec;
 use crate::physics::thornton::ThorntonImpact64;
-use crate::scene::{ContactLaw, SceneFile};
+use crate::scene::SceneFile;
 
 /// Area of the Hertz pulse over `F_max t_c`: `1.6 / 2.9432752` (the impulse `2 m u`).
 pub const C_AREA: f64 = 1.6 / CONTACT_TIME_FACTOR;
@@ -387,7 +387,7 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
 /// own law ([`SceneFile::class_law`]), at radius {min, geometric centre, max} x speed {min,
 /// centre, max}.
 pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
-    if scene.contact == ContactLaw::Hertz && !scene.yields() {
+    if scene.contact == LawSpec::Hertz && !scene.yields() {
         return Ok(None);
     }
     let plate = scene.plate.material();

@@ -19,7 +19,8 @@ use coalshock::ratio_map::{POINTS, RatioMap};
 use crate::bridge::calibrate::{PulseRatios, pulse_ratios};
 use crate::physics::impact::ImpactSpec;
 use crate::physics::integrate::SimError;
-use crate::scene::{ContactLaw, SceneFile};
+use crate::physics::law_spec::LawSpec;
+use crate::scene::SceneFile;
 
 /// `(a, b)` of `s = a ln R + b ln u`: `ln Lambda` up to a constant.
 pub const DIRECTION: (f64, f64) = (-2.0, -0.2);
@@ -43,7 +44,7 @@ pub struct RatioTable64 {
 pub fn needs_tables(scene: &SceneFile) -> bool {
     matches!(
         scene.contact,
-        ContactLaw::Adams { .. } | ContactLaw::AdamsRestitution { .. }
+        LawSpec::Adams { .. } | LawSpec::AdamsRestitution { .. }
     )
 }
 

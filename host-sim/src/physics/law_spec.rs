@@ -1,6 +1,7 @@
-//! How a scene or the CLI states a contact law (`LawSpec`), and the force law it builds; the
-//! Adams law tuned to a restitution is found by running the integrator
-//! ([`adams_for_restitution`]), so this sits above both `laws` and `integrate`.
+//! How a scene file, the CLI or a study states a contact law (`LawSpec`, also the scene file's
+//! `[contact]` table), and the force law it builds; the Adams law tuned to a restitution is
+//! found by running the integrator ([`adams_for_restitution`]), so this sits above both
+//! `laws` and `integrate`.
 
 use serde::{Deserialize, Serialize};
 
@@ -131,57 +132,65 @@ pub fn adams_for_restitution(
     Ok(make(best.exp()))
 }
 
-/// The user's choice of contact law, independent of the scene; [`LawSpec::build`] makes the
-/// concrete [`ForceLaw`] with the scene's Hertz stiffness `k = 4/3 E* sqrt(R)`, exponent 1.5,
-/// mass and impact speed.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// The user's choice of contact law, independent of the scene: the scene file's `[contact]`
+/// table (tag `law`, `snake_case` names, e.g. `law = "flores"`, `restitution = 0.5`), the
+/// command line's and the integrator's. [`LawSpec::build`] makes the concrete [`ForceLaw`]
+/// with the scene's Hertz stiffness `k = 4/3 E* sqrt(R)`, exponent 1.5, mass and impact speed;
+/// the contact is gravity-free (as the kernel's envelopes are).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LawSpec {
-    /// Undamped Hertz `F = k delta^1.5` (restitution 1).
+    /// Undamped Hertz `F = k delta^(3/2)` (restitution 1); the kernel's model.
+    #[default]
     Hertz,
-    /// Adams IMPACT with an explicit full damping `c_max_n_s_m` (N s/m) reached at `d_m` (m).
+    /// Hunt-Crossley `F = k delta^1.5 (1 + chi delta_dot / u)`, `chi = 3 (1 - e) / 2`.
+    HuntCrossley {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// Lankarani-Nikravesh, `chi = 3 (1 - e^2) / 4`.
+    LankaraniNikravesh {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// Flores et al., `chi = 8 (1 - e) / (5 e)`.
+    Flores {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// Gonthier et al., `chi = (1 - e^2) / e`.
+    Gonthier {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// DEM (Tsuji / Hertz-Mindlin) damping with `beta(e)`.
+    Tsuji {
+        /// Target coefficient of restitution `e` in (0, 1].
+        restitution: f64,
+    },
+    /// MSC Adams IMPACT `F = max(0, k delta^1.5 + STEP(delta, 0, 0, d, c_max) delta_dot)` with
+    /// an explicit full damping.
     Adams {
-        /// `c_max` in N s/m.
+        /// Full damping `c_max` in N s/m (`>= 0`).
         c_max_n_s_m: f64,
-        /// `d` in m (Adams suggests about 1e-5 m).
+        /// Penetration `d` in m over which the damping ramps up (`> 0`; Adams: about 1e-5).
         d_m: f64,
     },
-    /// Adams IMPACT with `c_max` chosen so that this scene rebounds with `restitution`
-    /// (see [`adams_for_restitution`]).
+    /// Adams IMPACT with `c_max` solved per impact so that it rebounds with `restitution`
+    /// (see [`adams_for_restitution`]; one root search per impact: slow).
     AdamsRestitution {
         /// Target coefficient of restitution in (0, 1).
         restitution: f64,
-        /// `d` in m.
+        /// Penetration `d` in m (`> 0`).
         d_m: f64,
-    },
-    /// Hunt-Crossley, `chi = 3 (1 - e)/2`.
-    HuntCrossley {
-        /// Target coefficient of restitution `e`.
-        restitution: f64,
-    },
-    /// Lankarani-Nikravesh, `chi = 3 (1 - e^2)/4`.
-    LankaraniNikravesh {
-        /// Target coefficient of restitution `e`.
-        restitution: f64,
-    },
-    /// Flores et al., `chi = 8 (1 - e)/(5 e)`.
-    Flores {
-        /// Target coefficient of restitution `e`.
-        restitution: f64,
-    },
-    /// Gonthier et al., `chi = (1 - e^2)/e`.
-    Gonthier {
-        /// Target coefficient of restitution `e`.
-        restitution: f64,
-    },
-    /// DEM Tsuji / Hertz-Mindlin damping with `beta(e)`.
-    Tsuji {
-        /// Target coefficient of restitution `e`.
-        restitution: f64,
     },
     /// Thornton's elastic-perfectly-plastic contact with limiting contact pressure
     /// `yield_pressure_pa` (Pa), optionally times the hysteresis damping
     /// `(1 + chi delta_dot / u)` of a restitution model (see [`crate::physics::thornton`]). Needs
-    /// the scene's `E*` and `R` (a [`HertzImpact64::new`]).
+    /// the scene's `E*` and `R` (a [`HertzImpact64::new`]). Not a `[contact]` law of a scene
+    /// file: a class that states `yield_pressure_pa` gets it ([`LawSpec::restitution_damping`]
+    /// of the scene's law).
+    #[serde(skip)]
     Thornton {
         /// Limiting contact pressure `p_y` in Pa.
         yield_pressure_pa: f64,
@@ -191,6 +200,22 @@ pub enum LawSpec {
 }
 
 impl LawSpec {
+    /// The restitution model and target `e` of a law of the restitution form `(1 + chi
+    /// delta_dot / u)` (Hunt-Crossley, Lankarani-Nikravesh, Flores, Gonthier), else `None`.
+    pub fn restitution_damping(&self) -> Option<(RestitutionModel, f64)> {
+        match *self {
+            Self::HuntCrossley { restitution } => {
+                Some((RestitutionModel::HuntCrossley, restitution))
+            }
+            Self::LankaraniNikravesh { restitution } => {
+                Some((RestitutionModel::LankaraniNikravesh, restitution))
+            }
+            Self::Flores { restitution } => Some((RestitutionModel::Flores, restitution)),
+            Self::Gonthier { restitution } => Some((RestitutionModel::Gonthier, restitution)),
+            _ => None,
+        }
+    }
+
     /// The concrete law for the scene `hertz` (stiffness, mass and speed are taken from it).
     pub fn build(&self, hertz: &HertzImpact64) -> Result<ForceLaw, SimError> {
         let k = hertz.stiffness;
