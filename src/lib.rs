@@ -27,6 +27,8 @@ pub mod monitor;
 pub mod ratio_map;
 pub mod sampled;
 pub mod scene;
+#[cfg(feature = "serde")]
+pub mod settings_serde;
 pub mod shape_fit;
 pub mod thornton;
 

@@ -47,6 +47,8 @@ use std::path::{Path, PathBuf};
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
+use coalshock::Settings;
+
 use crate::physics::hertz64::Material64;
 use crate::physics::law_spec::LawSpec;
 use crate::physics::sim_error::SimError;
@@ -777,76 +779,9 @@ impl SensorSpec {
     }
 }
 
-// ---------------------------------------------------------------------------------------------
-// Kernel settings overrides
-// ---------------------------------------------------------------------------------------------
-
-/// Optional overrides of the kernel's `coalshock::Settings` (`[settings]`); a missing field
-/// keeps the kernel default. The kernel checks the result when the scene is built.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SettingsOverrides {
-    /// Trigger level in noise RMS.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub trigger_sigmas: Option<f64>,
-    /// Release level in noise RMS.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub release_sigmas: Option<f64>,
-    /// Samples below the release level that end a pulse.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hold_samples: Option<u16>,
-    /// Baseline tracking time constant in s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub baseline_tau_s: Option<f64>,
-    /// Identical consecutive samples that flag a stuck sensor (0: off).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub stuck_samples: Option<u16>,
-    /// Model tolerance in log units.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub model_sigma: Option<f64>,
-    /// Share of class verdicts allowed to be wrong, in (0, 0.5): a class is reported when
-    /// its posterior reaches `1 - confident_error_rate` (kernel default 0.01).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub confident_error_rate: Option<f64>,
-    /// Standardised distance beyond which a pulse is out of every envelope.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub out_sigmas: Option<f64>,
-    /// Cells per side of the separability grid.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub separability_grid: Option<u16>,
-    /// Largest `|ln q|` of the pulse shape ratio before a pulse is `Misshapen` (raise it for
-    /// a damped contact or a resonant sensor).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shape_tolerance: Option<f64>,
-    /// The contact's measured / Hertz peak-force ratio (default: from the integrator for a
-    /// damped law, 1 for Hertz; see `calibrate`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub force_ratio: Option<f64>,
-    /// The contact's measured / Hertz duration ratio (default as `force_ratio`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub duration_ratio: Option<f64>,
-    /// The contact's pulse shape ratio `q` (default as `force_ratio`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shape_ratio: Option<f64>,
-    /// The spike check's allowance in units of the peak force (default 0.3, raised for a
-    /// damped law whose sampled pulse bends more sharply; see `calibrate`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub spike_fraction: Option<f64>,
-    /// The contact's pulse skewness (default: from the integrator for a damped law, 0 for
-    /// Hertz).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub skewness: Option<f64>,
-    /// Allowed distance of a pulse's skewness from the contact's (default 0.05, widened to
-    /// the calibration's spread).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub skew_tolerance: Option<f64>,
-}
-
-impl SettingsOverrides {
-    /// `true` when nothing is overridden.
-    pub fn is_empty(&self) -> bool {
-        *self == Self::default()
-    }
+/// Whether `s` is the kernel's default (a `[settings]` table with no key).
+fn settings_are_default(s: &Settings) -> bool {
+    *s == Settings::default()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -869,9 +804,12 @@ pub struct SceneFile {
     pub contact: LawSpec,
     /// The sensor chain.
     pub sensor: SensorSpec,
-    /// Overrides of the kernel's settings.
-    #[serde(default, skip_serializing_if = "SettingsOverrides::is_empty")]
-    pub settings: SettingsOverrides,
+    /// The kernel's settings (`[settings]`, read by the kernel's own serde form,
+    /// `coalshock::settings_serde`): a key not given keeps the kernel's default. For a damped
+    /// or yielding contact, `bridge::calibrate` fills in the calibration keys the file leaves
+    /// at their defaults.
+    #[serde(default, skip_serializing_if = "settings_are_default")]
+    pub settings: Settings,
 }
 
 impl SceneFile {
@@ -910,7 +848,7 @@ impl SceneFile {
             ],
             contact: LawSpec::Hertz,
             sensor: SensorSpec::rigid(100_000.0, 50.0, 30.0, 4.0, 16),
-            settings: SettingsOverrides::default(),
+            settings: Settings::default(),
         }
     }
 
@@ -978,13 +916,10 @@ impl SceneFile {
             ),
             ("settings.out_sigmas", self.settings.out_sigmas),
         ] {
-            if let Some(v) = v {
-                finite(name, v)?;
-            }
+            finite_f32(name, v)?;
         }
-        if let Some(v) = self.settings.confident_error_rate
-            && !(v > 0.0 && v < 0.5)
-        {
+        let v = self.settings.confident_error_rate;
+        if !(v > 0.0 && v < 0.5) {
             return Err(SceneError::invalid(
                 "settings.confident_error_rate",
                 format!(
@@ -1067,6 +1002,19 @@ fn finite(field: &str, v: f64) -> Result<(), SceneError> {
         ));
     }
     kernel_f32(field, v)
+}
+
+/// A kernel setting `v`, read as `f32` (a number beyond the `f32` range reads as infinite),
+/// finite and within [`KERNEL_RANGE`].
+fn finite_f32(field: &str, v: f32) -> Result<(), SceneError> {
+    if v.is_infinite() {
+        let hi = KERNEL_RANGE.1;
+        return Err(SceneError::invalid(
+            field,
+            format!("must be finite and at most {hi:e} in size (read as the kernel's f32: {v})"),
+        ));
+    }
+    finite(field, f64::from(v))
 }
 
 /// Smallest and largest magnitude the kernel carries in its `f32` closed forms, its own bounds
@@ -1245,5 +1193,63 @@ gain = 0.1
         assert_eq!(s.sensor.adc_range(), (-2048, 2047));
         let u = s.classes[0].speed_range_m_s();
         assert!((u.min - (2.0f64 * 9.80665 * 0.5).sqrt()).abs() < 1e-12);
+    }
+
+    /// The `[settings]` table: every key lands in its kernel field (the values and fields
+    /// written out here, not taken from the reader), a key not given keeps the kernel's
+    /// default, a float is rounded as `f64 as f32`, and an unknown key is refused by name.
+    #[test]
+    fn settings_keys_land_in_the_kernel_fields() {
+        let paper = SceneFile::paper().to_toml_string().expect("serialize");
+        assert!(!paper.contains("[settings]"), "defaults are not written");
+        let table = "[settings]\ntrigger_sigmas = 7\nrelease_sigmas = 2.5\nhold_samples = 3\n\
+                     baseline_tau_s = 0.05\nstuck_samples = 0\nmodel_sigma = 0.1\n\
+                     confident_error_rate = 0.1\nout_sigmas = 5.0\nseparability_grid = 16\n\
+                     shape_tolerance = 0.2\nforce_ratio = 0.9\nduration_ratio = 1.1\n\
+                     shape_ratio = 0.95\nspike_fraction = 0.6\nskewness = 0.3\n\
+                     skew_tolerance = 0.07\n";
+        let s = SceneFile::from_toml_str(&format!("{paper}{table}")).expect("parse");
+        let k = s.settings;
+        assert_eq!((k.trigger_sigmas, k.release_sigmas), (7.0, 2.5));
+        assert_eq!(
+            (k.hold_samples, k.stuck_samples, k.separability_grid),
+            (3, 0, 16)
+        );
+        assert_eq!(k.baseline_tau_s, 0.05f64 as f32);
+        assert_eq!(
+            (k.model_sigma, k.confident_error_rate),
+            (0.1f64 as f32, 0.1f64 as f32)
+        );
+        assert_eq!((k.out_sigmas, k.shape_tolerance), (5.0, 0.2f64 as f32));
+        assert_eq!(k.contact.force_ratio, 0.9f64 as f32);
+        assert_eq!(k.contact.duration_ratio, 1.1f64 as f32);
+        assert_eq!(k.contact.shape_ratio, 0.95f64 as f32);
+        assert_eq!(k.contact.skewness, 0.3f64 as f32);
+        assert_eq!(
+            (k.spike_fraction, k.skew_tolerance),
+            (0.6f64 as f32, 0.07f64 as f32)
+        );
+        assert_eq!(
+            SceneFile::from_toml_str(&s.to_toml_string().expect("write")).expect("read"),
+            s
+        );
+        let one = SceneFile::from_toml_str(&format!("{paper}[settings]\nout_sigmas = 3.5\n"))
+            .expect("parse");
+        let expected = Settings {
+            out_sigmas: 3.5,
+            ..Settings::default()
+        };
+        assert_eq!(one.settings, expected);
+        let e = SceneFile::from_toml_str(&format!("{paper}[settings]\ntrigger_sigma = 6.0\n"))
+            .expect_err("unknown key")
+            .to_string();
+        assert!(
+            e.contains("unknown field `trigger_sigma`") && e.contains("line"),
+            "{e}"
+        );
+        let e = SceneFile::from_toml_str(&format!("{paper}[settings]\nout_sigmas = 1e300\n"))
+            .expect_err("infinite")
+            .to_string();
+        assert!(e.contains("settings.out_sigmas"), "{e}");
     }
 }

@@ -13,7 +13,7 @@ use coalshock::{
 };
 
 use crate::physics::hertz64::Material64;
-use crate::scene::{ClassSpec, Range64, SceneFile, SensorSpec, SettingsOverrides, SpeedSpec};
+use crate::scene::{ClassSpec, Range64, SceneFile, SensorSpec, SpeedSpec};
 
 /// Why a scene file could not become a kernel scene.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -157,43 +157,6 @@ pub fn dynamics_to_kernel(s: &SensorSpec) -> Result<ChainDynamics, ConvertError>
     Ok(dynamics)
 }
 
-/// The kernel's default `Settings` with the file's overrides applied.
-pub fn settings_to_kernel(o: &SettingsOverrides) -> Settings {
-    let mut s = Settings::default();
-    let set = |dst: &mut f32, v: Option<f64>| {
-        if let Some(v) = v {
-            *dst = v as f32;
-        }
-    };
-    set(&mut s.trigger_sigmas, o.trigger_sigmas);
-    set(&mut s.release_sigmas, o.release_sigmas);
-    set(&mut s.baseline_tau_s, o.baseline_tau_s);
-    set(&mut s.model_sigma, o.model_sigma);
-    set(&mut s.confident_error_rate, o.confident_error_rate);
-    set(&mut s.out_sigmas, o.out_sigmas);
-    set(&mut s.shape_tolerance, o.shape_tolerance);
-    set(&mut s.spike_fraction, o.spike_fraction);
-    let ratio = |v: Option<f64>| v.unwrap_or(1.0) as f32;
-    s.contact = ContactCalibration {
-        force_ratio: ratio(o.force_ratio),
-        duration_ratio: ratio(o.duration_ratio),
-        shape_ratio: ratio(o.shape_ratio),
-        skewness: o.skewness.unwrap_or(0.0) as f32,
-        sampled: SampledCalibration::NONE,
-    };
-    set(&mut s.skew_tolerance, o.skew_tolerance);
-    if let Some(v) = o.hold_samples {
-        s.hold_samples = v;
-    }
-    if let Some(v) = o.stuck_samples {
-        s.stuck_samples = v;
-    }
-    if let Some(v) = o.separability_grid {
-        s.separability_grid = v;
-    }
-    s
-}
-
 /// The sampling correction in the kernel's f32.
 pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
     let f = |v: &[f64; SAMPLED_POINTS]| v.map(|x| x as f32);
@@ -271,22 +234,27 @@ impl KernelParts {
     }
 }
 
-/// The kernel settings of a scene file: [`settings_to_kernel`], and for a damped contact
-/// law or a yielding class the calibration of [`crate::bridge::calibrate::calibrate`] (each ratio
-/// unless the file gives it; a scene that yields also its `area_ratio`, by which the
-/// duration ratio is then divided). A law whose ratios vary between impacts widens the tolerances to cover them:
-/// `shape_tolerance >= 1.5 x` the spread of `ln q` (between impacts, plus that of sampling at
-/// the scene's rate), `model_sigma >= ` the larger spread of
+/// The kernel settings of a scene file: its `[settings]`, and for a damped contact law or a
+/// yielding class the calibration of [`crate::bridge::calibrate::calibrate`] (each ratio the
+/// file leaves at the kernel's default; a scene that yields also its `area_ratio`, by which the
+/// duration ratio is then divided). A law whose ratios vary between impacts widens the
+/// tolerances to cover them: `shape_tolerance >= 1.5 x` the spread of `ln q` (between
+/// impacts, plus that of sampling at the scene's rate), `model_sigma >= ` the larger spread of
 /// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend,
-/// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them). A scene
-/// whose classes carry ratio tables ([`ratio_maps_to_kernel`]) leaves the force and duration
-/// ratios to them (1 here), and its `model_sigma` is at least what the tables leave against
-/// direct integration ([`crate::bridge::ratio_table::class_residual`]).
+/// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them to other
+/// than the default). A file value equal to the kernel's default is not told from a missing
+/// one. A scene whose classes carry ratio tables ([`ratio_maps_to_kernel`]) leaves the force
+/// and duration ratios to them (1 here), and its `model_sigma` is at least what the tables
+/// leave against direct integration ([`crate::bridge::ratio_table::class_residual`]).
 pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> {
-    let mut s = settings_to_kernel(&scene.settings);
-    let o = &scene.settings;
+    let mut s = scene.settings;
+    let d = Settings::default();
     let cal = crate::bridge::calibrate::calibrate(scene).map_err(ConvertError::Calibration)?;
-    let pick = |given: Option<f64>, computed: Option<f64>| given.or(computed).unwrap_or(1.0) as f32;
+    // The file's value where it states one (other than the default), else the computed one.
+    let pick = |file: f32, default: f32, computed: Option<f64>| match computed {
+        Some(c) if file == default => c as f32,
+        _ => file,
+    };
     // A scene that yields reads its flatter pulses' duration with their own area
     // (`area_ratio`), and the classifier divides only by what remains of the ratio.
     let area = cal.filter(|_| scene.yields()).map_or(1.0, |c| c.area_ratio);
@@ -297,24 +265,30 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
     }
     let tables = crate::bridge::ratio_table::needs_tables(scene);
     let unless_tables = |v: f64| if tables { 1.0 } else { v };
+    let (o, dc) = (scene.settings.contact, d.contact);
     s.contact = ContactCalibration {
-        force_ratio: pick(o.force_ratio, cal.map(|c| unless_tables(c.ratios.force))),
+        force_ratio: pick(
+            o.force_ratio,
+            dc.force_ratio,
+            cal.map(|c| unless_tables(c.ratios.force)),
+        ),
         duration_ratio: pick(
             o.duration_ratio,
+            dc.duration_ratio,
             cal.map(|c| unless_tables(c.ratios.duration / area)),
         ),
-        shape_ratio: pick(o.shape_ratio, cal.map(|c| c.ratios.shape)),
-        skewness: o.skewness.or(cal.map(|c| c.skewness)).unwrap_or(0.0) as f32,
+        shape_ratio: pick(o.shape_ratio, dc.shape_ratio, cal.map(|c| c.ratios.shape)),
+        skewness: pick(o.skewness, dc.skewness, cal.map(|c| c.skewness)),
         sampled: cal
             .and_then(|c| c.sampled)
             .map_or(SampledCalibration::NONE, |t| sampled_to_kernel(&t)),
     };
     if let Some(c) = cal {
-        if o.shape_tolerance.is_none() {
+        if s.shape_tolerance == d.shape_tolerance {
             let spread = c.spread_ln.shape + c.sampled_shape_spread;
             s.shape_tolerance = s.shape_tolerance.max((1.5 * spread) as f32);
         }
-        if o.model_sigma.is_none() {
+        if s.model_sigma == d.model_sigma {
             let spread = if tables {
                 table_residual(scene)?
             } else {
@@ -322,10 +296,10 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
             };
             s.model_sigma = s.model_sigma.max(spread as f32);
         }
-        if o.skew_tolerance.is_none() {
+        if s.skew_tolerance == d.skew_tolerance {
             s.skew_tolerance = s.skew_tolerance.max((1.5 * c.skewness_spread) as f32);
         }
-        if o.spike_fraction.is_none() {
+        if s.spike_fraction == d.spike_fraction {
             s.spike_fraction = s.spike_fraction.max((1.25 * c.sharpest_bend) as f32);
         }
     }
@@ -471,7 +445,7 @@ mod tests {
     #[test]
     fn kernel_refusals_are_typed() {
         let mut s = SceneFile::paper();
-        s.settings.confident_error_rate = Some(0.6);
+        s.settings.confident_error_rate = 0.6;
         assert_eq!(
             scene_to_kernel(&s),
             Err(ConvertError::Kernel(coalshock::Error::OutOfRange(

@@ -666,7 +666,7 @@ mod tests {
     #[test]
     fn a_refused_scene_exports_nothing() {
         let mut s = SceneFile::paper();
-        s.settings.confident_error_rate = Some(0.6);
+        s.settings.confident_error_rate = 0.6;
         assert!(scene_source(&s, "x.toml").is_err());
     }
 }

@@ -484,7 +484,7 @@ pub fn evaluate_with_progress<M: Backend + Send + Sync>(
 ) -> Result<Evaluation, EvalError> {
     let mut scene = scene.clone();
     if let Some(rate) = opts.confident_error_rate {
-        scene.settings.confident_error_rate = Some(rate);
+        scene.settings.confident_error_rate = rate as f32;
     }
     scene.validate()?;
     if scene.classes.len() <= DEFAULT_CLASSES {

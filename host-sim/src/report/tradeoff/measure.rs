@@ -267,7 +267,7 @@ pub(crate) fn grid_rows(
     let mut measured = Vec::new();
     for &g in &sizes {
         let mut s = paper.clone();
-        s.settings.separability_grid = Some(g);
+        s.settings.separability_grid = g;
         let kernel = scene_to_kernel_in::<DEFAULT_CLASSES, Libm>(&s)?;
         let (overlap, bayes_error) = separability_from_kernel(&kernel.separability());
         let build = min_seconds(cfg.timing_reps, || {
