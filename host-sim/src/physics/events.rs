@@ -139,19 +139,35 @@ fn search(
 }
 
 /// Root of `g` on `[a, b]` with `ga`, `gb` of opposite signs (Illinois regula falsi, with a
-/// bisection fallback), to `|b - a| <= 4 eps`.
-pub(crate) fn illinois(
-    g: impl Fn(f64) -> f64,
+/// bisection fallback), to `|b - a| <= 4 eps` ([`illinois_until`] with no tolerances).
+pub(crate) fn illinois(g: impl Fn(f64) -> f64, a: f64, ga: f64, b: f64, gb: f64) -> f64 {
+    let exact = |x: f64| Ok::<f64, core::convert::Infallible>(g(x));
+    match illinois_until(exact, a, ga, b, gb, 0.0, 0.0) {
+        Ok(x) => x,
+        Err(never) => match never {},
+    }
+}
+
+/// Root of `g` on `[a, b]` with `ga`, `gb` of opposite signs: Illinois regula falsi (the
+/// secant of the bracket, the kept end's value halved when the same end is kept twice), with
+/// a bisection whenever the secant leaves the bracket and at every 8th step; at most 200
+/// evaluations. It stops at the first `x` with `|g(x)| <= g_tol` (`g(x) == 0` for 0), or when
+/// the bracket is at most `max(x_tol, 4 eps |b|)` wide, and returns the last `x` evaluated;
+/// the first error of `g` ends it.
+pub(crate) fn illinois_until<E>(
+    mut g: impl FnMut(f64) -> Result<f64, E>,
     mut a: f64,
     mut ga: f64,
     mut b: f64,
     mut gb: f64,
-) -> f64 {
+    g_tol: f64,
+    x_tol: f64,
+) -> Result<f64, E> {
     if ga == 0.0 {
-        return a;
+        return Ok(a);
     }
     if gb == 0.0 {
-        return b;
+        return Ok(b);
     }
     for it in 0..200 {
         let mut x = b - gb * (b - a) / (gb - ga);
@@ -159,9 +175,9 @@ pub(crate) fn illinois(
         if !(x > lo && x < hi) || it % 8 == 7 {
             x = 0.5 * (a + b);
         }
-        let gx = g(x);
-        if gx == 0.0 {
-            return x;
+        let gx = g(x)?;
+        if gx.abs() <= g_tol {
+            return Ok(x);
         }
         if gx * gb < 0.0 {
             a = b;
@@ -171,11 +187,11 @@ pub(crate) fn illinois(
         }
         b = x;
         gb = gx;
-        if (b - a).abs() <= 4.0 * f64::EPSILON * b.abs().max(1e-300) {
+        if (b - a).abs() <= x_tol.max(4.0 * f64::EPSILON * b.abs().max(1e-300)) {
             break;
         }
     }
-    b
+    Ok(b)
 }
 
 #[cfg(test)]
@@ -207,5 +223,43 @@ mod tests {
             let v = p.eval(f64::from(i) / 100.0);
             assert!(lo <= v && v <= hi);
         }
+    }
+
+    /// `x^3 - 2` on `[0, 2]`: the exact search ends within 4 eps of `cbrt 2`; with a tolerance
+    /// on `g` it stops as soon as `|g(x)| <= g_tol`, with fewer evaluations; an error of `g`
+    /// ends the search with that error.
+    #[test]
+    fn illinois_until_stops_at_its_tolerances_and_errors() {
+        let root = 2f64.cbrt();
+        let g = |x: f64| x * x * x - 2.0;
+        let x = illinois(g, 0.0, -2.0, 2.0, 6.0);
+        assert!((x - root).abs() <= 4.0 * f64::EPSILON * root, "{x}");
+        // The root with tolerance `g_tol` on `g`, and the evaluations it took.
+        let counted = |g_tol: f64| {
+            let mut calls = 0;
+            let counting = |x: f64| {
+                calls += 1;
+                Ok::<f64, ()>(g(x))
+            };
+            let x = illinois_until(counting, 0.0, -2.0, 2.0, 6.0, g_tol, 0.0);
+            (x.expect("no error"), calls)
+        };
+        let (exact, exact_calls) = counted(0.0);
+        assert_eq!(exact, x, "illinois is the search with no tolerance");
+        let (loose, loose_calls) = counted(1e-6);
+        assert!(
+            g(loose).abs() <= 1e-6 && loose_calls < exact_calls,
+            "{loose}"
+        );
+        let failed = illinois_until(
+            |x| if x > 1.0 { Err(x) } else { Ok(g(x)) },
+            0.0,
+            -2.0,
+            2.0,
+            6.0,
+            0.0,
+            0.0,
+        );
+        assert!(failed.is_err());
     }
 }

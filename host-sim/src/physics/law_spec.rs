@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::physics::events::illinois_until;
 use crate::physics::hertz64::{HERTZ_TC_FACTOR, HertzImpact64, positive};
 use crate::physics::integrate::{ContactProblem, Limits, Method, Tolerance, integrate_contact};
 use crate::physics::laws::{ForceLaw, RestitutionModel};
@@ -18,10 +19,10 @@ use crate::physics::thornton::ThorntonContact;
 /// Adams has no closed form for this, so `c_max` is found numerically: the impact is
 /// simulated with Dormand-Prince 5(4) at rtol = atol = 1e-10 (scaled state, stopping at
 /// the kink) and the simulated restitution `e(c_max)`, which falls monotonically from 1 at
-/// `c_max = 0`, is solved for the target by bracketed regula falsi (Illinois) on
-/// `ln c_max`, starting from the linear-oscillator estimate
-/// `c = 2 zeta m pi / t_c`, `zeta = -ln e / sqrt(pi^2 + ln^2 e)`, until
-/// `|e(c_max) - e| <= 1e-9`. The restitution of the result depends on the speed: it is
+/// `c_max = 0`, is solved for the target by bracketed regula falsi (Illinois,
+/// [`crate::physics::events::illinois_until`]) on `ln c_max`, starting from the
+/// linear-oscillator estimate `c = 2 zeta m pi / t_c`, `zeta = -ln e / sqrt(pi^2 + ln^2 e)`,
+/// until `|e(c_max) - e| <= 1e-9` or the bracket on `ln c_max` is 1e-13 wide. The restitution of the result depends on the speed: it is
 /// the target only at `speed_m_s`.
 pub fn adams_for_restitution(
     stiffness: f64,
@@ -105,31 +106,9 @@ pub fn adams_for_restitution(
             }
         }
     }
-    if gb == 0.0 {
-        return Ok(make(b.exp()));
-    }
-    // Illinois on [a, b] with ga > 0 > gb.
-    let mut best = if ga.abs() < gb.abs() { a } else { b };
-    for _ in 0..100 {
-        let mut x = b - gb * (b - a) / (gb - ga);
-        if !(x > a.min(b) && x < a.max(b)) {
-            x = 0.5 * (a + b);
-        }
-        let gx = eval(x)?;
-        best = x;
-        if gx.abs() <= 1e-9 || (b - a).abs() < 1e-13 {
-            break;
-        }
-        if gx * gb < 0.0 {
-            a = b;
-            ga = gb;
-        } else {
-            ga *= 0.5;
-        }
-        b = x;
-        gb = gx;
-    }
-    Ok(make(best.exp()))
+    // Illinois on [a, b] with ga > 0 >= gb.
+    let ln_c = illinois_until(eval, a, ga, b, gb, 1e-9, 1e-13)?;
+    Ok(make(ln_c.exp()))
 }
 
 /// The user's choice of contact law, independent of the scene: the scene file's `[contact]`
