@@ -68,7 +68,7 @@ fn main() {
 fn same_as_file(node: &Scene<DEFAULT_CLASSES, DefaultBackend>, file: &std::path::Path, what: &str) {
     let from_file = host_sim::scene::load(file)
         .map_err(|e| format!("{e}"))
-        .and_then(|f| host_sim::convert::scene_to_kernel(&f).map_err(|e| format!("{e:?}")))
+        .and_then(|f| host_sim::kernel_scene::scene_to_kernel(&f).map_err(|e| format!("{e:?}")))
         .unwrap_or_else(|e| fail(format!("{what} file {e}")));
     if &from_file != node {
         let name = file

@@ -1,6 +1,8 @@
 //! Layer 4, bridge: a host scene made into the kernel's f32 scene — the contact calibration
-//! and the conversion. Imports physics and scene.
+//! and ratio tables (f64 integrator runs), the pure conversion to f32, and the kernel scene
+//! that composes them. Imports physics and scene.
 
 pub mod calibrate;
 pub mod convert;
+pub mod kernel_scene;
 pub mod ratio_table;

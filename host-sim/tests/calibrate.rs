@@ -11,10 +11,10 @@
 
 use coalshock::math::DefaultBackend;
 use host_sim::calibrate::{C_AREA, C_ENERGY, calibrate, pulse_ratios, skewness};
-use host_sim::convert::calibrated_settings;
 use host_sim::evaluate::{EvalOptions, evaluate};
 use host_sim::hertz64::Material64;
 use host_sim::impact::{ImpactSpec, simulate};
+use host_sim::kernel_scene::calibrated_settings;
 use host_sim::law_spec::LawSpec;
 use host_sim::scene::{self, SceneFile};
 

@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use host_sim::convert::scene_to_kernel;
 use host_sim::generate::generate;
 use host_sim::hertz64::Material64;
+use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::scene::{MaterialName, MaterialSpec, SceneFile};
 use host_sim::stream::StreamOptions;
 use host_sim::stream_file::{read_stream, stream_paths, write_stream};

@@ -16,9 +16,9 @@
 //! - every scene shipped in `scenes/` loads, converts and evaluates.
 
 use coalshock::math::{DefaultBackend, Libm};
-use host_sim::convert::scene_to_kernel;
 use host_sim::evaluate::{EvalError, EvalOptions, Evaluation, evaluate};
 use host_sim::generate::generate_class;
+use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::reference::ReferenceOptions;
 use host_sim::scene::{self, SceneFile};
 use host_sim::stream::StreamOptions;

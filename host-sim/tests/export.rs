@@ -3,8 +3,8 @@
 //! file (`fw/stream.sh --check` and the `node_replay` example check the same in CI).
 
 use coalshock::math::DefaultBackend;
-use host_sim::convert::scene_to_kernel;
 use host_sim::export::scene_source;
+use host_sim::kernel_scene::scene_to_kernel;
 
 fn root() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

@@ -3,9 +3,9 @@
 //! envelopes they bend.
 
 use host_sim::calibrate::pulse_ratios;
-use host_sim::convert::scene_to_kernel;
 use host_sim::hertz64::HertzImpact64;
 use host_sim::impact::ImpactSpec;
+use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::law_spec::LawSpec;
 use host_sim::ratio_table::{class_residual, class_table, direct, needs_tables};
 use host_sim::scene::{SceneFile, load};

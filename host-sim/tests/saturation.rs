@@ -8,9 +8,9 @@
 
 use coalshock::classifier::RejectReason;
 use coalshock::{Monitor, Verdict};
-use host_sim::convert::scene_to_kernel;
 use host_sim::generate::generate;
 use host_sim::hertz64::HertzImpact64;
+use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::replay::{match_truth, replay};
 use host_sim::saturation::predict;
 use host_sim::scene::SceneFile;

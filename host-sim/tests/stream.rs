@@ -17,8 +17,9 @@
 
 use coalshock::classifier::RejectReason;
 use coalshock::{Monitor, Verdict};
-use host_sim::convert::{measurement_from_kernel, scene_to_kernel};
+use host_sim::convert::measurement_from_kernel;
 use host_sim::generate::generate;
+use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::replay::{match_truth, replay, replay_events};
 use host_sim::scene::{Resonance, SceneFile};
 use host_sim::stream::{

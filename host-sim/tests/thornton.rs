@@ -274,7 +274,7 @@ fn kernel_ratios_match_the_integrator() {
 fn kernel_yield_envelope_follows_the_closed_forms() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/paper_yield.toml");
     let file = scene::load(&path).unwrap();
-    let kernel = host_sim::convert::scene_to_kernel(&file).unwrap();
+    let kernel = host_sim::kernel_scene::scene_to_kernel(&file).unwrap();
     let mut worst = (0.0f64, 0.0f64);
     for (c, env) in file.classes.iter().zip(kernel.envelopes()) {
         assert!(env.ratio_map.is_some(), "{}", c.name);

@@ -10,8 +10,8 @@
 //! - two yielding impacts piled into one pulse are not measured.
 
 use coalshock::{Detection, Detector, RejectReason, Scene};
-use host_sim::convert::scene_to_kernel;
 use host_sim::impact::{ImpactSpec, simulate};
+use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::scene::{self, SceneFile};
 use host_sim::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
 

@@ -1,19 +1,22 @@
-//! The one place where host values (`f64`, [`crate::scene`]) become the kernel's `f32` types
-//! and back. Every `f64 -> f32` cast rounds to nearest; the kernel then checks the values
-//! (a value beyond the f32 range becomes infinite and the kernel refuses it by name).
+//! The one place where host values (`f64`, [`crate::scene`], and the calibration already
+//! computed) become the kernel's `f32` types and back: pure mappings, no integrator run (a
+//! scene file's whole kernel scene, calibration first, is [`crate::bridge::kernel_scene`]).
+//! Every `f64 -> f32` cast rounds to nearest; the kernel then checks the values (a value
+//! beyond the f32 range becomes infinite and the kernel refuses it by name).
 
 use coalshock::math::Backend;
 use coalshock::ratio_map::RatioMap;
-use coalshock::scene::{DEFAULT_CLASSES, SAMPLED_POINTS};
+use coalshock::scene::SAMPLED_POINTS;
 
-use crate::bridge::calibrate::Sampled64;
+use crate::bridge::calibrate::{Calibration64, Sampled64};
+use crate::bridge::ratio_table::RatioTable64;
 use coalshock::{
     Accelerometer, BeamMode, ChainDynamics, ChainTolerance, ContactCalibration, Material,
     Measurement, ParticleClass, Range, SampledCalibration, Scene, SensorChain, Settings, Speed,
 };
 
 use crate::physics::hertz64::Material64;
-use crate::scene::{ClassSpec, Range64, SceneFile, SensorSpec, SpeedSpec};
+use crate::scene::{ClassSpec, Range64, SensorSpec, SpeedSpec};
 
 /// Why a scene file could not become a kernel scene.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -80,20 +83,15 @@ pub fn class_to_kernel(c: &ClassSpec) -> ParticleClass {
     k
 }
 
-/// The kernel ratio map of each class of a scene file (`Scene::with_ratio_maps`): its table
-/// when the scene's law needs one ([`crate::bridge::ratio_table`]: a fixed-coefficient Adams
-/// law), else none (an empty list); a table that cannot be integrated or that the kernel
-/// refuses is an error.
-pub fn ratio_maps_to_kernel(scene: &SceneFile) -> Result<Vec<Option<RatioMap>>, ConvertError> {
-    if !crate::bridge::ratio_table::needs_tables(scene) {
-        return Ok(Vec::new());
-    }
-    (0..scene.classes.len())
-        .map(|i| {
-            let table = crate::bridge::ratio_table::class_table(scene, i)
-                .map_err(ConvertError::Calibration)?;
-            Ok(Some(table.to_kernel().map_err(ConvertError::Kernel)?))
-        })
+/// The kernel ratio map of each class (`Scene::with_ratio_maps`) from its f64 ratio table
+/// ([`crate::bridge::ratio_table`]), `None` for none (an empty list: no class has a table); a
+/// table the kernel refuses is [`ConvertError::Kernel`].
+pub fn ratio_maps_to_kernel(
+    tables: &[RatioTable64],
+) -> Result<Vec<Option<RatioMap>>, ConvertError> {
+    tables
+        .iter()
+        .map(|t| Ok(Some(t.to_kernel().map_err(ConvertError::Kernel)?)))
         .collect()
 }
 
@@ -168,88 +166,30 @@ pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
     }
 }
 
-/// A scene file -> the kernel scene with the default capacity and backend, via `Scene::new`.
-pub fn scene_to_kernel(scene: &SceneFile) -> Result<Scene, ConvertError> {
-    scene_to_kernel_in::<DEFAULT_CLASSES, coalshock::math::DefaultBackend>(scene)
-}
-
-/// [`scene_to_kernel`] with capacity `N` and math backend `M`.
-pub fn scene_to_kernel_in<const N: usize, M: Backend>(
-    scene: &SceneFile,
-) -> Result<Scene<N, M>, ConvertError> {
-    // Checked before the parts, whose calibration may run the integrator.
-    within_capacity::<N>(scene.classes.len())?;
-    KernelParts::of(scene)?.scene_in::<N, M>(&scene.sensor)
-}
-
-/// `Err(TooManyClasses)` unless `classes <= N`.
-fn within_capacity<const N: usize>(classes: usize) -> Result<(), ConvertError> {
-    if classes > N {
-        return Err(ConvertError::TooManyClasses {
-            classes,
-            capacity: N,
-        });
-    }
-    Ok(())
-}
-
-/// What a kernel scene takes from its scene file besides the sensor chain: the plate, the
-/// classes, their ratio maps and the calibrated settings. Building them may run the
-/// integrator ([`calibrated_settings`], [`ratio_maps_to_kernel`]); a study that gives the
-/// kernel several chains for one scene builds them once.
-#[derive(Debug, Clone)]
-pub struct KernelParts {
-    plate: Material,
-    classes: Vec<ParticleClass>,
-    ratio_maps: Vec<Option<RatioMap>>,
-    settings: Settings,
-}
-
-impl KernelParts {
-    /// The parts of `scene`.
-    pub fn of(scene: &SceneFile) -> Result<Self, ConvertError> {
-        Ok(Self {
-            plate: material_to_kernel(&scene.plate.material()),
-            classes: scene.classes.iter().map(class_to_kernel).collect(),
-            ratio_maps: ratio_maps_to_kernel(scene)?,
-            settings: calibrated_settings(scene)?,
-        })
-    }
-
-    /// The kernel scene of these parts behind the chain `sensor`, with capacity `N` and math
-    /// backend `M`, via `Scene::with_ratio_maps`.
-    pub fn scene_in<const N: usize, M: Backend>(
-        &self,
-        sensor: &SensorSpec,
-    ) -> Result<Scene<N, M>, ConvertError> {
-        within_capacity::<N>(self.classes.len())?;
-        Scene::with_ratio_maps(
-            self.plate,
-            &self.classes,
-            &self.ratio_maps,
-            sensor_to_kernel_in::<M>(sensor)?,
-            self.settings,
-        )
-        .map_err(ConvertError::Kernel)
-    }
-}
-
-/// The kernel settings of a scene file: its `[settings]`, and for a damped contact law or a
-/// yielding class the calibration of [`crate::bridge::calibrate::calibrate`] (each ratio the
-/// file leaves at the kernel's default; a scene that yields also its `area_ratio`, by which the
-/// duration ratio is then divided). A law whose ratios vary between impacts widens the
-/// tolerances to cover them: `shape_tolerance >= 1.5 x` the spread of `ln q` (between
-/// impacts, plus that of sampling at the scene's rate), `model_sigma >= ` the larger spread of
-/// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend,
-/// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them to other
-/// than the default). A file value equal to the kernel's default is not told from a missing
-/// one. A scene whose classes carry ratio tables ([`ratio_maps_to_kernel`]) leaves the force
-/// and duration ratios to them (1 here), and its `model_sigma` is at least what the tables
-/// leave against direct integration ([`crate::bridge::ratio_table::class_residual`]).
-pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> {
-    let mut s = scene.settings;
+/// The kernel settings of a scene file from its `[settings]` (`file`) and the f64 values its
+/// calibration computed ([`crate::bridge::kernel_scene::SceneCalibration`]): `contact`, the
+/// contact calibration of a damped law or a yielding class (`None`: the Hertz law, no yield),
+/// `yields` whether a class yields, and `table_residual` the residual of the classes' ratio
+/// tables (`None`: no tables). Each ratio of the contact calibration is taken unless the file
+/// states one other than the kernel's default; a scene that yields also takes `area_ratio`,
+/// by which the duration ratio is then divided, and `flat_top_ratio`. A law whose ratios vary
+/// between impacts widens the tolerances to cover them: `shape_tolerance >= 1.5 x` the spread
+/// of `ln q` (between impacts, plus that of sampling at the scene's rate), `model_sigma >= `
+/// the larger spread of `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled
+/// bend, `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file states them
+/// other than the default: a file value equal to the kernel's default is not told from a
+/// missing one). A scene whose classes carry ratio tables leaves the force and duration ratios
+/// to them (1 here), and its `model_sigma` is at least what the tables leave against direct
+/// integration (`table_residual`). Every value is rounded to `f32` here.
+pub fn settings_to_kernel(
+    file: &Settings,
+    contact: Option<&Calibration64>,
+    yields: bool,
+    table_residual: Option<f64>,
+) -> Settings {
+    let mut s = *file;
     let d = Settings::default();
-    let cal = crate::bridge::calibrate::calibrate(scene).map_err(ConvertError::Calibration)?;
+    let cal = contact.copied();
     // The file's value where it states one (other than the default), else the computed one.
     let pick = |file: f32, default: f32, computed: Option<f64>| match computed {
         Some(c) if file == default => c as f32,
@@ -257,15 +197,14 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
     };
     // A scene that yields reads its flatter pulses' duration with their own area
     // (`area_ratio`), and the classifier divides only by what remains of the ratio.
-    let area = cal.filter(|_| scene.yields()).map_or(1.0, |c| c.area_ratio);
+    let area = cal.filter(|_| yields).map_or(1.0, |c| c.area_ratio);
     s.area_ratio = area as f32;
     // ... and allows its broader tops a longer run of equal samples before calling one clipped.
-    if let Some(c) = cal.filter(|_| scene.yields()) {
+    if let Some(c) = cal.filter(|_| yields) {
         s.flat_top_ratio = c.flat_top_ratio.max(1.0) as f32;
     }
-    let tables = crate::bridge::ratio_table::needs_tables(scene);
-    let unless_tables = |v: f64| if tables { 1.0 } else { v };
-    let (o, dc) = (scene.settings.contact, d.contact);
+    let unless_tables = |v: f64| if table_residual.is_some() { 1.0 } else { v };
+    let (o, dc) = (file.contact, d.contact);
     s.contact = ContactCalibration {
         force_ratio: pick(
             o.force_ratio,
@@ -289,11 +228,7 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
             s.shape_tolerance = s.shape_tolerance.max((1.5 * spread) as f32);
         }
         if s.model_sigma == d.model_sigma {
-            let spread = if tables {
-                table_residual(scene)?
-            } else {
-                c.spread_ln.force.max(c.spread_ln.duration)
-            };
+            let spread = table_residual.unwrap_or(c.spread_ln.force.max(c.spread_ln.duration));
             s.model_sigma = s.model_sigma.max(spread as f32);
         }
         if s.skew_tolerance == d.skew_tolerance {
@@ -303,22 +238,7 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
             s.spike_fraction = s.spike_fraction.max((1.25 * c.sharpest_bend) as f32);
         }
     }
-    Ok(s)
-}
-
-/// The largest of the classes' residual spreads (root mean square) of their ratio tables
-/// against direct integration, of the peak force or the duration, in log units
-/// ([`crate::bridge::ratio_table::class_residual`]).
-fn table_residual(scene: &SceneFile) -> Result<f64, ConvertError> {
-    let mut worst = 0.0f64;
-    for i in 0..scene.classes.len() {
-        let table =
-            crate::bridge::ratio_table::class_table(scene, i).map_err(ConvertError::Calibration)?;
-        let (f, t) = crate::bridge::ratio_table::class_residual(scene, i, &table)
-            .map_err(ConvertError::Calibration)?;
-        worst = worst.max(f).max(t);
-    }
-    Ok(worst)
+    s
 }
 
 /// A kernel measurement in `f64`: peak force (N), duration (s) and their log-unit standard
@@ -398,30 +318,6 @@ pub fn duration_bounds_from_kernel<const N: usize, M: Backend>(scene: &Scene<N, 
 mod tests {
     use super::*;
 
-    fn scene_file(name: &str) -> SceneFile {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("..")
-            .join("scenes")
-            .join(name);
-        crate::scene::load(path).expect("shipped scene loads")
-    }
-
-    #[test]
-    fn paper_toml_is_the_kernel_paper_scene() {
-        let file = scene_file("paper.toml");
-        assert_eq!(file, SceneFile::paper());
-        let kernel = scene_to_kernel(&file).expect("converts");
-        assert_eq!(kernel, Scene::paper().expect("kernel preset"));
-    }
-
-    #[test]
-    fn paper_narrow_toml_is_the_kernel_narrow_scene() {
-        let file = scene_file("paper_narrow.toml");
-        assert_eq!(file, SceneFile::paper_narrow());
-        let kernel = scene_to_kernel(&file).expect("converts");
-        assert_eq!(kernel, Scene::paper_narrow().expect("kernel preset"));
-    }
-
     #[test]
     fn materials_round_trip_and_named_table_matches_kernel() {
         use crate::scene::MaterialName;
@@ -440,30 +336,5 @@ mod tests {
                 "{name:?}"
             );
         }
-    }
-
-    #[test]
-    fn kernel_refusals_are_typed() {
-        let mut s = SceneFile::paper();
-        s.settings.confident_error_rate = 0.6;
-        assert_eq!(
-            scene_to_kernel(&s),
-            Err(ConvertError::Kernel(coalshock::Error::OutOfRange(
-                "confident_error_rate"
-            )))
-        );
-        let mut s = SceneFile::paper();
-        for i in 0..3 {
-            let mut c = s.classes[0].clone();
-            c.name = format!("extra{i}");
-            s.classes.push(c);
-        }
-        assert!(matches!(
-            scene_to_kernel(&s),
-            Err(ConvertError::TooManyClasses {
-                classes: 5,
-                capacity: 4
-            })
-        ));
     }
 }

@@ -1,9 +1,9 @@
 //! `host-sim export`: a scene file as Rust source that a firmware includes, a function that
-//! builds the kernel `Scene` exactly as [`crate::bridge::convert::scene_to_kernel`] builds it from the
+//! builds the kernel `Scene` exactly as [`crate::bridge::kernel_scene::scene_to_kernel`] builds it from the
 //! file: the same materials, classes (names, radius and speed ranges, priors), sensor chain
 //! (`SensorChain::from_plate` and, for a chain with modes or an accelerometer, its dynamics
 //! designed with the firmware's math backend) and the settings of
-//! [`crate::bridge::convert::calibrated_settings`] (the contact calibration of a damped law and the
+//! [`crate::bridge::kernel_scene::calibrated_settings`] (the contact calibration of a damped law and the
 //! tolerances it widens), every `f32` written as the shortest literal that reads back to the
 //! same bits (`{:?}` of the `f32`).
 //!
@@ -21,9 +21,9 @@ use coalshock::{
 };
 
 use crate::bridge::convert::{
-    ConvertError, calibrated_settings, class_to_kernel, dynamics_to_kernel, material_to_kernel,
-    ratio_maps_to_kernel, scene_to_kernel,
+    ConvertError, class_to_kernel, dynamics_to_kernel, material_to_kernel, ratio_maps_to_kernel,
 };
+use crate::bridge::kernel_scene::{SceneCalibration, scene_to_kernel};
 use crate::scene::SceneFile;
 
 /// `host-sim export`: reads the scene file `scene_path`, writes the source to `out` (standard
@@ -282,9 +282,10 @@ fn settings(out: &mut String, s: &Settings) {
 /// converted first ([`scene_to_kernel`]), so a file the kernel refuses exports nothing.
 pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertError> {
     scene_to_kernel(scene)?;
-    let settings_k = calibrated_settings(scene)?;
+    let cal = SceneCalibration::of(scene).map_err(ConvertError::Calibration)?;
+    let settings_k = cal.settings(scene);
     let classes: Vec<ParticleClass> = scene.classes.iter().map(class_to_kernel).collect();
-    let maps = ratio_maps_to_kernel(scene)?;
+    let maps = ratio_maps_to_kernel(&cal.tables)?;
     let plate = material_to_kernel(&scene.plate.material());
     let dynamics = dynamics_to_kernel(&scene.sensor)?;
     let rigid = dynamics.is_rigid();
@@ -505,7 +506,8 @@ mod tests {
             }
             has(material(kernel.plate()));
             // The host's tables (the kernel fills a yielding class's map itself).
-            for m in ratio_maps_to_kernel(&file)
+            let cal = SceneCalibration::of(&file).expect("calibration");
+            for m in ratio_maps_to_kernel(&cal.tables)
                 .expect("tables")
                 .iter()
                 .flatten()
@@ -587,7 +589,9 @@ mod tests {
             }
             // The export writes the scene file's calibration; the kernel adds its chain's
             // residual (`coalshock::chain_residual`) when it builds the scene, on the node too.
-            let c = calibrated_settings(&file).expect("settings").contact;
+            let c = crate::bridge::kernel_scene::calibrated_settings(&file)
+                .expect("settings")
+                .contact;
             if contact_is_default(&c) {
                 assert!(!text.contains("ContactCalibration"), "{name}");
             } else {

@@ -55,7 +55,7 @@ use coalshock::math::Backend;
 use coalshock::scene::{DEFAULT_CLASSES, MAX_CLASSES};
 use coalshock::{Event, Monitor, Scene, Verdict};
 
-use crate::bridge::convert::scene_to_kernel_in;
+use crate::bridge::kernel_scene::scene_to_kernel_in;
 use crate::scene::{SceneFile, SpeedSpec};
 use crate::score::bayes::ClassModel;
 use crate::score::cusum::{Cusum, MixtureModel, NaiveRule, increment, label_increment, median_p90};

@@ -90,7 +90,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use crate::bridge::convert::{KernelParts, measurement_from_kernel, separability_from_kernel};
+use crate::bridge::convert::{measurement_from_kernel, separability_from_kernel};
+use crate::bridge::kernel_scene::KernelParts;
 use crate::physics::hertz64::HertzImpact64;
 use crate::scene::SceneFile;
 pub use crate::score::bayes::class_models;

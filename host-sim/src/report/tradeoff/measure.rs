@@ -13,8 +13,9 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::bridge::convert::{
-    duration_bounds_from_kernel, kernel_impact_in, scene_to_kernel_in, separability_from_kernel,
+    duration_bounds_from_kernel, kernel_impact_in, separability_from_kernel,
 };
+use crate::bridge::kernel_scene::scene_to_kernel_in;
 use crate::physics::hertz64::{HertzImpact64, Material64};
 use crate::physics::integrate::{ContactProblem, Method};
 use crate::physics::integrator_cases::{MethodCase, ladder, relative_errors, undamped_problem};
