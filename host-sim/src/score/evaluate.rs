@@ -1079,11 +1079,30 @@ fn estimate_noise(outcomes: &[Outcome], col_rej: usize) -> NoiseEstimate {
     }
 }
 
+/// A share as a percentage, `7.3` wide with its unit (`" 76.309 %"`).
+fn pct(v: f64) -> String {
+    format!("{:7.3} %", 100.0 * v)
+}
+
 impl Evaluation {
     /// The evaluation as human-readable tables (what `host-sim evaluate` prints without
-    /// `--json`).
+    /// `--json`): the header, the confusion matrices, the kernel's rates, its feature errors,
+    /// the reference limit, the diagnostics, the paired losses and the run's figures.
     pub fn table(&self) -> String {
         let mut s = String::new();
+        self.header_text(&mut s);
+        self.confusion_text(&mut s);
+        self.kernel_text(&mut s);
+        self.feature_error_text(&mut s);
+        s += &self.reference_table();
+        self.diagnostics_text(&mut s);
+        self.paired_loss_text(&mut s);
+        self.run_text(&mut s);
+        s
+    }
+
+    /// The scene, its classes, the impacts, seed and backend.
+    fn header_text(&self, s: &mut String) {
         let _ = writeln!(
             s,
             "scene {} ({} classes), {} impacts per class, seed {}, backend {}",
@@ -1097,6 +1116,10 @@ impl Evaluation {
             self.seed,
             self.backend
         );
+    }
+
+    /// The verdicts' and the forced choice's confusion matrices, and the rejections by reason.
+    fn confusion_text(&self, s: &mut String) {
         let width = self
             .columns
             .iter()
@@ -1120,11 +1143,11 @@ impl Evaluation {
                 let _ = writeln!(s);
             }
         };
-        matrix(&mut s, "verdicts", &self.columns, &self.confusion);
+        matrix(s, "verdicts", &self.columns, &self.confusion);
         let mut forced_cols = self.classes.clone();
         forced_cols.push("none".into());
         matrix(
-            &mut s,
+            s,
             "forced choice (none: rejected or missed)",
             &forced_cols,
             &self.forced_confusion,
@@ -1137,7 +1160,10 @@ impl Evaluation {
                 .collect();
             let _ = writeln!(s, "rejected: {}", reasons.join(", "));
         }
-        let pct = |v: f64| format!("{:7.3} %", 100.0 * v);
+    }
+
+    /// The kernel's forced-choice accuracy (overall and per class), coverage and rates.
+    fn kernel_text(&self, s: &mut String) {
         let _ = writeln!(s, "\nkernel");
         let _ = writeln!(
             s,
@@ -1163,6 +1189,10 @@ impl Evaluation {
             pct(self.missed_share).trim()
         );
         let _ = writeln!(s, "  spurious reports            {}", self.spurious_reports);
+    }
+
+    /// The errors of the kernel's features against the Hertz and the simulated pulse.
+    fn feature_error_text(&self, s: &mut String) {
         let n = &self.noise;
         let _ = writeln!(s, "\nfeature errors, ln(measured) - ln(reference)");
         let _ = writeln!(
@@ -1192,7 +1222,10 @@ impl Evaluation {
             "  the kernel's own sigma: F {:.4}, t_c {:.4} (mean over its measurements)",
             n.kernel_sigma_ln_force, n.kernel_sigma_ln_duration
         );
-        s += &self.reference_table();
+    }
+
+    /// The f64 diagnostics at the kernel's measured noise.
+    fn diagnostics_text(&self, s: &mut String) {
         let _ = writeln!(s, "\ndiagnostics (f64, at the kernel's measured noise)");
         let _ = writeln!(
             s,
@@ -1217,6 +1250,10 @@ impl Evaluation {
             "    same, bias removed        {}",
             pct(self.bayes_on_measured_debiased_accuracy)
         );
+    }
+
+    /// The paired losses on the same impacts.
+    fn paired_loss_text(&self, s: &mut String) {
         let _ = writeln!(s, "\npaired losses (same impacts)");
         let paired = |s: &mut String, what: &str, p: &Paired| {
             let _ = writeln!(
@@ -1227,20 +1264,24 @@ impl Evaluation {
             );
         };
         paired(
-            &mut s,
+            s,
             "measurement (Bayes on measured, debiased - oracle)",
             &self.measured_vs_oracle,
         );
         paired(
-            &mut s,
+            s,
             "constant bias (Bayes on measured - debiased)",
             &self.bias_loss,
         );
         paired(
-            &mut s,
+            s,
             "kernel classifier (kernel - Bayes on measured)",
             &self.kernel_vs_bayes_on_measured,
         );
+    }
+
+    /// The chain given to the kernel and the samples, pulses and time of the run.
+    fn run_text(&self, s: &mut String) {
         let [mf, md, mg] = self.chain_mismatch;
         let _ = writeln!(
             s,
@@ -1259,7 +1300,6 @@ impl Evaluation {
             "{} samples fed, {} pulses reported, {:.4} s in the kernel ({:.1} ns per sample)",
             self.samples_fed, self.pulses_detected, self.kernel_seconds, self.kernel_ns_per_sample
         );
-        s
     }
 }
 
