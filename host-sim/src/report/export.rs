@@ -16,15 +16,15 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use coalshock::ratio_map::RatioMap;
 use coalshock::{
-    Accelerometer, BeamMode, ChainTolerance, ContactCalibration, Material, ParticleClass, Range,
-    SampledCalibration, Settings, Speed,
+    Accelerometer, BeamMode, ChainDynamics, ChainTolerance, ContactCalibration, Material,
+    ParticleClass, Range, SampledCalibration, Settings, Speed,
 };
 
 use crate::bridge::convert::{
     ConvertError, class_to_kernel, dynamics_to_kernel, material_to_kernel, ratio_maps_to_kernel,
 };
 use crate::bridge::kernel_scene::{SceneCalibration, scene_to_kernel};
-use crate::scene::SceneFile;
+use crate::scene::{SceneFile, SensorSpec};
 
 /// `host-sim export`: reads the scene file `scene_path`, writes the source to `out` (standard
 /// output when `None`).
@@ -195,6 +195,24 @@ fn sampled_literal(s: &SampledCalibration) -> String {
 /// The settings as `Settings { .., ..Settings::default() }` with every field whose bits differ
 /// from the default's (host-sim starts from the default too), or `Settings::default()`.
 fn settings(out: &mut String, s: &Settings) {
+    let mut fields = changed_fields(s);
+    if !contact_is_default(&s.contact) {
+        fields.push(contact_field(&s.contact));
+    }
+    if fields.is_empty() {
+        out.push_str("    let settings = Settings::default();\n");
+    } else {
+        out.push_str("    let settings = Settings {\n");
+        for f in fields {
+            out.push_str(&f);
+        }
+        out.push_str("        ..Settings::default()\n    };\n");
+    }
+}
+
+/// `name: value,` of every number of `s` (all but the contact calibration) whose bits differ
+/// from the default's.
+fn changed_fields(s: &Settings) -> Vec<String> {
     let d = Settings::default();
     // Destructured in full: a field added to the kernel's settings is a build error here.
     let Settings {
@@ -208,7 +226,7 @@ fn settings(out: &mut String, s: &Settings) {
         out_sigmas,
         separability_grid,
         shape_tolerance,
-        contact,
+        contact: _,
         spike_fraction,
         skew_tolerance,
         area_ratio,
@@ -243,38 +261,32 @@ fn settings(out: &mut String, s: &Settings) {
     int("hold_samples", hold_samples, d.hold_samples);
     int("stuck_samples", stuck_samples, d.stuck_samples);
     int("separability_grid", separability_grid, d.separability_grid);
+    fields
+}
+
+/// `contact: ContactCalibration { .. },` with every ratio and the sampling correction.
+fn contact_field(contact: &ContactCalibration) -> String {
     let ContactCalibration {
         force_ratio,
         duration_ratio,
         shape_ratio,
         skewness,
         sampled,
-    } = contact;
-    if !contact_is_default(&contact) {
-        fields.push(format!(
-            "        contact: ContactCalibration {{\n            \
-                         force_ratio: {},\n            \
-                         duration_ratio: {},\n            \
-                         shape_ratio: {},\n            \
-                         skewness: {},\n            \
-                         sampled: {},\n        \
-                     }},\n",
-            lit(force_ratio),
-            lit(duration_ratio),
-            lit(shape_ratio),
-            lit(skewness),
-            sampled_literal(&sampled),
-        ));
-    }
-    if fields.is_empty() {
-        out.push_str("    let settings = Settings::default();\n");
-    } else {
-        out.push_str("    let settings = Settings {\n");
-        for f in fields {
-            out.push_str(&f);
-        }
-        out.push_str("        ..Settings::default()\n    };\n");
-    }
+    } = *contact;
+    format!(
+        "        contact: ContactCalibration {{\n            \
+                     force_ratio: {},\n            \
+                     duration_ratio: {},\n            \
+                     shape_ratio: {},\n            \
+                     skewness: {},\n            \
+                     sampled: {},\n        \
+                 }},\n",
+        lit(force_ratio),
+        lit(duration_ratio),
+        lit(shape_ratio),
+        lit(skewness),
+        sampled_literal(&sampled),
+    )
 }
 
 /// The Rust source of `scene` (read from the file named `source` in the header): a module
@@ -288,14 +300,58 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
     let maps = ratio_maps_to_kernel(&cal.tables)?;
     let plate = material_to_kernel(&scene.plate.material());
     let dynamics = dynamics_to_kernel(&scene.sensor)?;
-    let rigid = dynamics.is_rigid();
-    let s = &scene.sensor;
+    let tables = !maps.is_empty();
 
     let mut out = String::new();
-    let name = if scene.name.is_empty() {
+    header(&mut out, source, &scene.name);
+    imports(&mut out, &settings_k, &dynamics, tables);
+    let _ = write!(
+        out,
+        "/// The scene with math backend `M`{}.\n\
+         #[inline(never)]\n\
+         pub fn scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, Error> {{\n    \
+             let classes = [\n",
+        if dynamics.is_rigid() {
+            ""
+        } else {
+            " (the chain's equaliser designed with `M`)"
+        }
+    );
+    for c in &classes {
+        class(&mut out, c);
+    }
+    out.push_str("    ];\n");
+    sensor_chain(&mut out, &scene.sensor, &dynamics);
+    settings(&mut out, &settings_k);
+    if tables {
+        out.push_str("    let maps = [\n");
+        for m in maps.iter().flatten() {
+            out.push_str(&ratio_map_item(m));
+        }
+        out.push_str("    ];\n");
+    }
+    let _ = write!(
+        out,
+        "    Scene::{}(\n        \
+                 {},\n        \
+                 &classes,\n        \
+                 {}sensor,\n        \
+                 settings,\n    \
+             )\n\
+         }}\n",
+        if tables { "with_ratio_maps" } else { "new" },
+        material(&plate),
+        if tables { "&maps,\n        " } else { "" },
+    );
+    Ok(out)
+}
+
+/// The module's doc header: which file, which scene, how it was made.
+fn header(out: &mut String, source: &str, scene_name: &str) {
+    let name = if scene_name.is_empty() {
         String::new()
     } else {
-        format!(" ({:?})", scene.name)
+        format!(" ({scene_name:?})")
     };
     let _ = write!(
         out,
@@ -306,13 +362,18 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
          //! byte.\n\
          \n"
     );
+}
+
+/// The `use` lines: the kernel's items the source names, in one list filled to rustfmt's 100
+/// columns as it would.
+fn imports(out: &mut String, settings: &Settings, dynamics: &ChainDynamics, tables: bool) {
     let mut uses = vec!["Error", "Material", "ParticleClass"];
-    if !contact_is_default(&settings_k.contact) {
+    if !contact_is_default(&settings.contact) {
         // The calibration literal names its sampling correction (or its `NONE`).
         uses.extend(["ContactCalibration", "SampledCalibration"]);
     }
     uses.extend(["Range", "Scene", "SensorChain", "Settings", "Speed"]);
-    if !rigid {
+    if !dynamics.is_rigid() {
         uses.push("ChainDynamics");
         if !dynamics.modes().is_empty() {
             uses.push("BeamMode");
@@ -325,8 +386,6 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
         }
     }
     uses.sort_unstable();
-    let tables = !maps.is_empty();
-    // One import list, filled to rustfmt's 100 columns as it would.
     let one_line = format!("use coalshock::{{{}}};", uses.join(", "));
     let mut lines = Vec::new();
     let mut line = String::from("   ");
@@ -353,104 +412,72 @@ pub fn scene_source(scene: &SceneFile, source: &str) -> Result<String, ConvertEr
             ""
         }
     );
-    let _ = write!(
+}
+
+/// `let sensor = ..`: the plate's chain, and, unless it is rigid, its dynamics (modes,
+/// accelerometer, tolerance) designed with `M`.
+fn sensor_chain(out: &mut String, s: &SensorSpec, dynamics: &ChainDynamics) {
+    let _ = writeln!(
         out,
-        "/// The scene with math backend `M`{}.\n\
-         #[inline(never)]\n\
-         pub fn scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, Error> {{\n    \
-             let classes = [\n",
-        if rigid {
-            ""
-        } else {
-            " (the chain's equaliser designed with `M`)"
-        }
-    );
-    for c in &classes {
-        class(&mut out, c);
-    }
-    let _ = write!(
-        out,
-        "    ];\n    \
-             let sensor = SensorChain::from_plate({}, {}, {}, {}, {});\n",
+        "    let sensor = SensorChain::from_plate({}, {}, {}, {}, {});",
         lit(s.sample_rate_hz as f32),
         lit(s.effective_mass_kg as f32),
         lit(s.counts_per_m_s2 as f32),
         lit(s.noise_rms_counts as f32),
         s.adc_bits,
     );
-    if !rigid {
-        out.push_str("    let dynamics = ChainDynamics::RIGID");
-        for m in dynamics.modes() {
-            let BeamMode {
-                frequency_hz,
-                damping_ratio,
-                gain,
-            } = *m;
-            let _ = write!(
-                out,
-                "\n        .with_mode(BeamMode {{\n            \
-                     frequency_hz: {},\n            \
-                     damping_ratio: {},\n            \
-                     gain: {},\n        \
-                 }})?",
-                lit(frequency_hz),
-                lit(damping_ratio),
-                lit(gain),
-            );
-        }
-        if let Some(Accelerometer {
+    if dynamics.is_rigid() {
+        return;
+    }
+    out.push_str("    let dynamics = ChainDynamics::RIGID");
+    for m in dynamics.modes() {
+        let BeamMode {
             frequency_hz,
             damping_ratio,
-        }) = dynamics.accelerometer()
-        {
-            let _ = write!(
-                out,
-                "\n        .with_accelerometer(Accelerometer {{\n            \
-                     frequency_hz: {},\n            \
-                     damping_ratio: {},\n        \
-                 }})",
-                lit(frequency_hz),
-                lit(damping_ratio),
-            );
-        }
-        let t = dynamics.tolerance();
-        if t != ChainTolerance::IDENTIFIED {
-            let _ = write!(
-                out,
-                "\n        .with_tolerance(ChainTolerance {{\n            \
-                     frequency: {},\n            \
-                     damping: {},\n            \
-                     gain: {},\n        \
-                 }})?",
-                lit(t.frequency),
-                lit(t.damping),
-                lit(t.gain),
-            );
-        }
-        out.push_str(";\n    let sensor = sensor.with_dynamics_in::<M>(dynamics)?;\n");
+            gain,
+        } = *m;
+        let _ = write!(
+            out,
+            "\n        .with_mode(BeamMode {{\n            \
+                 frequency_hz: {},\n            \
+                 damping_ratio: {},\n            \
+                 gain: {},\n        \
+             }})?",
+            lit(frequency_hz),
+            lit(damping_ratio),
+            lit(gain),
+        );
     }
-    settings(&mut out, &settings_k);
-    if tables {
-        out.push_str("    let maps = [\n");
-        for m in maps.iter().flatten() {
-            out.push_str(&ratio_map_item(m));
-        }
-        out.push_str("    ];\n");
+    if let Some(Accelerometer {
+        frequency_hz,
+        damping_ratio,
+    }) = dynamics.accelerometer()
+    {
+        let _ = write!(
+            out,
+            "\n        .with_accelerometer(Accelerometer {{\n            \
+                 frequency_hz: {},\n            \
+                 damping_ratio: {},\n        \
+             }})",
+            lit(frequency_hz),
+            lit(damping_ratio),
+        );
     }
-    let _ = write!(
-        out,
-        "    Scene::{}(\n        \
-                 {},\n        \
-                 &classes,\n        \
-                 {}sensor,\n        \
-                 settings,\n    \
-             )\n\
-         }}\n",
-        if tables { "with_ratio_maps" } else { "new" },
-        material(&plate),
-        if tables { "&maps,\n        " } else { "" },
-    );
-    Ok(out)
+    let t = dynamics.tolerance();
+    if t != ChainTolerance::IDENTIFIED {
+        let _ = write!(
+            out,
+            "\n        .with_tolerance(ChainTolerance {{\n            \
+                 frequency: {},\n            \
+                 damping: {},\n            \
+                 gain: {},\n        \
+             }})?",
+            lit(t.frequency),
+            lit(t.damping),
+            lit(t.gain),
+        );
+    }
+    out.push_str(";\n    let sensor = sensor.with_dynamics_in::<M>(dynamics)?;\n");
 }
 
 #[cfg(test)]
