@@ -848,76 +848,13 @@ fn run_n<const N: usize, M: Backend + Send + Sync>(
         models: class_models(scene),
         gangue,
     };
-    // Every round has its own seeds: simulated on every core, taken in order.
-    let round_ids: Vec<usize> = (0..opts.rounds).collect();
-    let mut rounds = Vec::with_capacity(opts.rounds);
-    map_ordered(
-        &round_ids,
-        |_, &r| simulate_round(scene, &kernel, opts, &mixture, r),
-        |_, round| {
-            rounds.push(round?);
-            Ok::<(), CavingError>(())
-        },
-    )?;
-    let alpha = opts.false_alarm_rate;
+    let rounds = simulate_rounds(scene, &kernel, opts, &mixture)?;
     let flow_for = |a: f64| {
         FlowMonitor::<M>::new(opts.flow_config(&mixture.gangue, a), &kernel)
             .map_err(|e| opt_err("flow", e.to_string()))
     };
-    let online: Vec<Option<usize>> = rounds
-        .iter()
-        .map(|r| {
-            r.pulses
-                .iter()
-                .find(|p| p.status.is_some_and(|s| s.alarm))
-                .map(|p| p.impact)
-        })
-        .collect();
-    let (p0, p1) = (opts.pre_share, opts.level);
-    let reference_at = |a: f64| -> Vec<Option<usize>> {
-        rounds
-            .iter()
-            .map(|r| {
-                impact_close(r, a, |i| {
-                    i.exact_ln_ratio.map_or(0.0, |d| increment(p0, p1, d))
-                })
-            })
-            .collect()
-    };
-    let labels_at = |a: f64| -> Vec<Option<usize>> {
-        rounds
-            .iter()
-            .map(|r| impact_close(r, a, |i| label_increment(p0, p1, i.gangue)))
-            .collect()
-    };
-    let pre: Vec<&PulseRec> = rounds
-        .iter()
-        .flat_map(|r| r.pulses.iter().filter(|p| p.impact < opts.pre_impacts))
-        .collect();
-    let q0 = pre.iter().filter(|p| p.confident_gangue).count() as f64 / pre.len().max(1) as f64;
-    let naive = naive_setting(&pre, opts, q0);
-    let naive_closes: Vec<_> = rounds
-        .iter()
-        .map(|r| naive_close(r, naive.k, naive.n))
-        .collect();
-    let (reference, labels) = (reference_at(alpha), labels_at(alpha));
-    let false_alarms =
-        measure_false_alarms(&rounds, &pre, &mixture, opts, &naive, &flow_for(alpha)?);
+    let pre = pre_change_pulses(&rounds, opts);
     let kl = information(&rounds, &mixture, opts);
-    let h = -alpha.ln();
-    let crossing = opts.crossing();
-    let kernel_mining = mining(&rounds, &online, crossing);
-    let mut replay = flow_for(alpha)?;
-    let kernel_replay_agrees = rounds
-        .iter()
-        .zip(&online)
-        .all(|(r, c)| kernel_close(r, &mut replay) == *c);
-    let pulses: usize = rounds.iter().map(|r| r.pulses.len()).sum();
-    let left_out = rounds
-        .iter()
-        .flat_map(|r| &r.pulses)
-        .filter(|p| p.ln_ratio.is_none())
-        .count();
     let curve = CURVE_RATES
         .iter()
         .map(|&a| {
@@ -927,13 +864,146 @@ fn run_n<const N: usize, M: Backend + Send + Sync>(
                 opts,
                 a,
                 &kl,
-                &reference_at,
-                &labels_at,
+                &|a| reference_closes(&rounds, opts, a),
+                &|a| label_closes(&rounds, opts, a),
                 flow_for(a),
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(CavingReport {
+    let closes = Closes::at_setting(&rounds, &pre, &mixture, opts, &flow_for)?;
+    Ok(report(scene, opts, &rounds, closes, kl, curve))
+}
+
+/// Every round, simulated on every core with its own seeds, taken in order.
+fn simulate_rounds<const N: usize, M: Backend + Send + Sync>(
+    scene: &SceneFile,
+    kernel: &Scene<N, M>,
+    opts: &CavingOptions,
+    mixture: &MixtureModel,
+) -> Result<Vec<Round>, CavingError> {
+    let round_ids: Vec<usize> = (0..opts.rounds).collect();
+    let mut rounds = Vec::with_capacity(opts.rounds);
+    map_ordered(
+        &round_ids,
+        |_, &r| simulate_round(scene, kernel, opts, mixture, r),
+        |_, round| {
+            rounds.push(round?);
+            Ok::<(), CavingError>(())
+        },
+    )?;
+    Ok(rounds)
+}
+
+/// The pulses of every round before the change.
+fn pre_change_pulses<'a>(rounds: &'a [Round], opts: &CavingOptions) -> Vec<&'a PulseRec> {
+    rounds
+        .iter()
+        .flat_map(|r| r.pulses.iter().filter(|p| p.impact < opts.pre_impacts))
+        .collect()
+}
+
+/// Each round's close by the exact-feature reference at false-alarm rate `alpha`.
+fn reference_closes(rounds: &[Round], opts: &CavingOptions, alpha: f64) -> Vec<Option<usize>> {
+    let (p0, p1) = (opts.pre_share, opts.level);
+    rounds
+        .iter()
+        .map(|r| {
+            impact_close(r, alpha, |i| {
+                i.exact_ln_ratio.map_or(0.0, |d| increment(p0, p1, d))
+            })
+        })
+        .collect()
+}
+
+/// Each round's close by the label oracle at false-alarm rate `alpha`.
+fn label_closes(rounds: &[Round], opts: &CavingOptions, alpha: f64) -> Vec<Option<usize>> {
+    let (p0, p1) = (opts.pre_share, opts.level);
+    rounds
+        .iter()
+        .map(|r| impact_close(r, alpha, |i| label_increment(p0, p1, i.gangue)))
+        .collect()
+}
+
+/// Where each detector closed each round at the chosen false-alarm rate, with the false
+/// alarms measured there.
+struct Closes {
+    /// The kernel's flow monitor, as it ran in the rounds.
+    online: Vec<Option<usize>>,
+    /// The exact-feature reference.
+    reference: Vec<Option<usize>>,
+    /// The label oracle.
+    labels: Vec<Option<usize>>,
+    /// The naive k-of-n rule and its closes.
+    naive: NaiveSetting,
+    naive_closes: Vec<Option<usize>>,
+    /// The measured false-alarm rates.
+    false_alarms: FalseAlarms,
+    /// Whether replaying the kernel's pulses through a fresh monitor closes where it did.
+    kernel_replay_agrees: bool,
+}
+
+impl Closes {
+    fn at_setting<M: Backend>(
+        rounds: &[Round],
+        pre: &[&PulseRec],
+        mixture: &MixtureModel,
+        opts: &CavingOptions,
+        flow_for: &dyn Fn(f64) -> Result<FlowMonitor<M>, CavingError>,
+    ) -> Result<Self, CavingError> {
+        let alpha = opts.false_alarm_rate;
+        let online: Vec<Option<usize>> = rounds
+            .iter()
+            .map(|r| {
+                r.pulses
+                    .iter()
+                    .find(|p| p.status.is_some_and(|s| s.alarm))
+                    .map(|p| p.impact)
+            })
+            .collect();
+        let q0 = pre.iter().filter(|p| p.confident_gangue).count() as f64 / pre.len().max(1) as f64;
+        let naive = naive_setting(pre, opts, q0);
+        let naive_closes = rounds
+            .iter()
+            .map(|r| naive_close(r, naive.k, naive.n))
+            .collect();
+        let false_alarms =
+            measure_false_alarms(rounds, pre, mixture, opts, &naive, &flow_for(alpha)?);
+        let mut replay = flow_for(alpha)?;
+        let kernel_replay_agrees = rounds
+            .iter()
+            .zip(&online)
+            .all(|(r, c)| kernel_close(r, &mut replay) == *c);
+        Ok(Self {
+            online,
+            reference: reference_closes(rounds, opts, alpha),
+            labels: label_closes(rounds, opts, alpha),
+            naive,
+            naive_closes,
+            false_alarms,
+            kernel_replay_agrees,
+        })
+    }
+}
+
+/// The report of the rounds: delays, mining outcomes and information of every detector.
+fn report(
+    scene: &SceneFile,
+    opts: &CavingOptions,
+    rounds: &[Round],
+    c: Closes,
+    kl: Information,
+    curve: Vec<CurvePoint>,
+) -> CavingReport {
+    let h = -opts.false_alarm_rate.ln();
+    let crossing = opts.crossing();
+    let kernel_mining = mining(rounds, &c.online, crossing);
+    let pulses: usize = rounds.iter().map(|r| r.pulses.len()).sum();
+    let left_out = rounds
+        .iter()
+        .flat_map(|r| &r.pulses)
+        .filter(|p| p.ln_ratio.is_none())
+        .count();
+    CavingReport {
         scene: scene.name.clone(),
         rounds: opts.rounds,
         seed: opts.seed,
@@ -942,41 +1012,41 @@ fn run_n<const N: usize, M: Backend + Send + Sync>(
         pre_share: opts.pre_share,
         post_share: opts.post_share,
         level: opts.level,
-        false_alarm_rate: alpha,
+        false_alarm_rate: opts.false_alarm_rate,
         threshold_nats: h,
         rate_hz: opts.rate_hz,
         window_impacts: opts.window_impacts,
         pre_impacts: opts.pre_impacts,
         post_impacts: opts.post_impacts,
-        detection_delay_impacts: delays(&online, opts),
-        reference_delay_impacts: delays(&reference, opts),
-        label_oracle_delay_impacts: delays(&labels, opts),
-        naive_delay_impacts: delays(&naive_closes, opts),
-        naive_rule: naive,
-        false_alarms_per_1e5_impacts: false_alarms.kernel_per_1e5,
-        false_alarms,
+        detection_delay_impacts: delays(&c.online, opts),
+        reference_delay_impacts: delays(&c.reference, opts),
+        label_oracle_delay_impacts: delays(&c.labels, opts),
+        naive_delay_impacts: delays(&c.naive_closes, opts),
+        naive_rule: c.naive,
+        false_alarms_per_1e5_impacts: c.false_alarms.kernel_per_1e5,
+        false_alarms: c.false_alarms,
         recovery_rate: kernel_mining.recovery_rate,
         gangue_content: kernel_mining.gangue_content,
         clairvoyant: mining(
-            &rounds,
+            rounds,
             &vec![crossing.checked_sub(1); rounds.len()],
             crossing,
         ),
-        naive: mining(&rounds, &naive_closes, crossing),
-        reference: mining(&rounds, &reference, crossing),
-        label_oracle: mining(&rounds, &labels, crossing),
+        naive: mining(rounds, &c.naive_closes, crossing),
+        reference: mining(rounds, &c.reference, crossing),
+        label_oracle: mining(rounds, &c.labels, crossing),
         kl_nats_per_impact: kl,
         lorden_delay_impacts: Information {
             kernel: h / kl.kernel,
             reference: h / kl.reference,
             labels: h / kl.labels,
         },
-        kernel_replay_agrees,
+        kernel_replay_agrees: c.kernel_replay_agrees,
         pulses,
         left_out_share: left_out as f64 / pulses.max(1) as f64,
         curve,
-        trace: trace(&rounds, opts),
-    })
+        trace: trace(rounds, opts),
+    }
 }
 
 /// Every measured false-alarm rate at the setting (see the module docs).
