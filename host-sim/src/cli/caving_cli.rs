@@ -186,6 +186,14 @@ fn curve(label: &str, points: Vec<(f64, f64)>, color: RGBColor, stroke: Stroke) 
 
 /// Writes caving_share.svg (the first round), caving_delay.svg and caving_curve.csv.
 pub fn write_plots(r: &CavingReport, dir: &Path) -> Result<()> {
+    share_plot(r, dir)?;
+    delay_plot(r, dir)?;
+    curve_csv(r, dir)
+}
+
+/// caving_share.svg: the first round's share estimate with its band, the true share, the
+/// level and the kernel's alarm.
+fn share_plot(r: &CavingReport, dir: &Path) -> Result<()> {
     let t = &r.trace;
     let share: Vec<_> = t.points.iter().map(|p| (p.0 as f64, p.1)).collect();
     let hi: Vec<_> = t
@@ -238,6 +246,11 @@ pub fn write_plots(r: &CavingReport, dir: &Path) -> Result<()> {
         &curves,
         true,
     )?;
+    Ok(())
+}
+
+/// caving_delay.svg: the median delay of each detector, and `h / KL`, against false alarms.
+fn delay_plot(r: &CavingReport, dir: &Path) -> Result<()> {
     let pts = |f: fn(&crate::score::caving::CurvePoint) -> f64| -> Vec<(f64, f64)> {
         r.curve
             .iter()
@@ -281,6 +294,11 @@ pub fn write_plots(r: &CavingReport, dir: &Path) -> Result<()> {
         ],
         true,
     )?;
+    Ok(())
+}
+
+/// caving_curve.csv: the delay-against-false-alarm curve.
+fn curve_csv(r: &CavingReport, dir: &Path) -> Result<()> {
     let mut csv = String::from(
         "false_alarm_rate,threshold_nats,kernel_false_alarms_per_1e5,kernel_median,reference_median,label_oracle_median,kernel_lorden,reference_lorden\n",
     );

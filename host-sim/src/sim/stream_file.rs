@@ -48,12 +48,8 @@ struct Row {
 /// Writes `<stem>.bin` (little-endian `i16`) and `<stem>.truth.csv`; returns both paths.
 pub fn write_stream(stream: &Stream, out: &Path) -> Result<(PathBuf, PathBuf), StreamError> {
     let (bin, csv_path) = stream_paths(out);
-    let io = |path: &Path| {
-        let path = path.to_path_buf();
-        move |error| StreamError::Io { path, error }
-    };
     if let Some(dir) = bin.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
     }
     let mut bytes = Vec::with_capacity(2 * stream.samples.len());
     for s in &stream.samples {
@@ -61,26 +57,68 @@ pub fn write_stream(stream: &Stream, out: &Path) -> Result<(PathBuf, PathBuf), S
     }
     std::fs::File::create(&bin)
         .and_then(|mut f| f.write_all(&bytes))
-        .map_err(io(&bin))?;
+        .map_err(io_err(&bin))?;
+    let header = Row {
+        kind: "stream".into(),
+        id: Some(0),
+        sample: Some(stream.timeline_samples),
+        position: Some(stream.samples.len() as u64),
+        value: Some(stream.sample_rate_hz),
+        time_s: Some(stream.phase_s),
+        ..Row::default()
+    };
+    let classes: Vec<Row> = stream
+        .class_names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| Row {
+            kind: "class".into(),
+            id: Some(i as u64),
+            class: Some(i),
+            class_name: Some(name.clone()),
+            ..Row::default()
+        })
+        .collect();
+    let rows = timed_rows(stream);
+    let mut w = csv::Writer::from_path(&csv_path).map_err(|e| csv_err(&csv_path, e))?;
+    for row in std::iter::once(&header)
+        .chain(classes.iter())
+        .chain(rows.iter().map(|(_, r)| r))
+    {
+        w.serialize(row).map_err(|e| csv_err(&csv_path, e))?;
+    }
+    w.flush().map_err(io_err(&csv_path))?;
+    Ok((bin, csv_path))
+}
 
-    let fs = stream.sample_rate_hz;
-    // Stored position of a time-line index, None when it was dropped or is past the end.
-    let position = |at: u64| -> Option<u64> {
-        if at >= stream.timeline_samples {
+/// The I/O error of `path`.
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StreamError {
+    let path = path.to_path_buf();
+    move |error| StreamError::Io { path, error }
+}
+
+/// Stored position of the time-line index `at`, `None` when it was dropped or is past the
+/// end.
+fn stored_position(stream: &Stream, at: u64) -> Option<u64> {
+    if at >= stream.timeline_samples {
+        return None;
+    }
+    let mut lost = 0u64;
+    for g in &stream.gaps {
+        if g.at_sample > at {
+            break;
+        }
+        if at < g.at_sample.saturating_add(g.lost as u64) {
             return None;
         }
-        let mut lost = 0u64;
-        for g in &stream.gaps {
-            if g.at_sample > at {
-                break;
-            }
-            if at < g.at_sample.saturating_add(g.lost as u64) {
-                return None;
-            }
-            lost += g.lost as u64;
-        }
-        Some(at - lost)
-    };
+        lost += g.lost as u64;
+    }
+    Some(at - lost)
+}
+
+/// The impact, gap, spike and stuck rows, by time-line sample.
+fn timed_rows(stream: &Stream) -> Vec<(u64, Row)> {
+    let fs = stream.sample_rate_hz;
     let mut rows: Vec<(u64, Row)> = Vec::new();
     for (i, t) in stream.truth.iter().enumerate() {
         rows.push((
@@ -89,7 +127,7 @@ pub fn write_stream(stream: &Stream, out: &Path) -> Result<(PathBuf, PathBuf), S
                 kind: "impact".into(),
                 id: Some(i as u64),
                 sample: Some(t.peak_sample),
-                position: position(t.peak_sample),
+                position: stored_position(stream, t.peak_sample),
                 length: Some((t.duration_s * fs).ceil() as u64),
                 value: Some(t.scale),
                 class: Some(t.class),
@@ -127,7 +165,7 @@ pub fn write_stream(stream: &Stream, out: &Path) -> Result<(PathBuf, PathBuf), S
                 },
                 id: Some(i as u64),
                 sample: Some(e.at_sample),
-                position: position(e.at_sample),
+                position: stored_position(stream, e.at_sample),
                 length: Some(e.length as u64),
                 value: Some(e.value),
                 ..Row::default()
@@ -135,36 +173,7 @@ pub fn write_stream(stream: &Stream, out: &Path) -> Result<(PathBuf, PathBuf), S
         ));
     }
     rows.sort_by_key(|(at, _)| *at);
-    let header = Row {
-        kind: "stream".into(),
-        id: Some(0),
-        sample: Some(stream.timeline_samples),
-        position: Some(stream.samples.len() as u64),
-        value: Some(stream.sample_rate_hz),
-        time_s: Some(stream.phase_s),
-        ..Row::default()
-    };
-    let classes: Vec<Row> = stream
-        .class_names
-        .iter()
-        .enumerate()
-        .map(|(i, name)| Row {
-            kind: "class".into(),
-            id: Some(i as u64),
-            class: Some(i),
-            class_name: Some(name.clone()),
-            ..Row::default()
-        })
-        .collect();
-    let mut w = csv::Writer::from_path(&csv_path).map_err(|e| csv_err(&csv_path, e))?;
-    for row in std::iter::once(&header)
-        .chain(classes.iter())
-        .chain(rows.iter().map(|(_, r)| r))
-    {
-        w.serialize(row).map_err(|e| csv_err(&csv_path, e))?;
-    }
-    w.flush().map_err(io(&csv_path))?;
-    Ok((bin, csv_path))
+    rows
 }
 
 fn csv_err(path: &Path, e: csv::Error) -> StreamError {
@@ -216,23 +225,7 @@ fn check_length(
 /// many as the truth file says (see `FORMATS.md`).
 pub fn read_stream(out: &Path) -> Result<Stream, StreamError> {
     let (bin, csv_path) = stream_paths(out);
-    let mut bytes = Vec::new();
-    std::fs::File::open(&bin)
-        .and_then(|mut f| f.read_to_end(&mut bytes))
-        .map_err(|error| StreamError::Io {
-            path: bin.clone(),
-            error,
-        })?;
-    if bytes.len() % 2 != 0 {
-        return Err(StreamError::Format {
-            path: bin,
-            message: "odd number of bytes: not a stream of i16 samples".into(),
-        });
-    }
-    let samples: Vec<i16> = bytes
-        .chunks_exact(2)
-        .map(|c| i16::from_le_bytes([c[0], c[1]]))
-        .collect();
+    let samples = read_samples(&bin)?;
     let bad = |message: String| StreamError::Format {
         path: csv_path.clone(),
         message,
@@ -251,59 +244,8 @@ pub fn read_stream(out: &Path) -> Result<Stream, StreamError> {
     let mut stored_samples = None;
     for (line, row) in rd.deserialize::<Row>().enumerate() {
         let row = row.map_err(|e| csv_err(&csv_path, e))?;
-        let need = |name: &str, v: Option<f64>| {
-            v.ok_or_else(|| bad(format!("row {}: {} row without {name}", line + 2, row.kind)))
-        };
-        let need_u = |name: &str, v: Option<u64>| need(name, v.map(|x| x as f64)).map(|x| x as u64);
-        match row.kind.as_str() {
-            "stream" => {
-                stream.sample_rate_hz = need("value", row.value)?;
-                stream.phase_s = need("time_s", row.time_s)?;
-                stream.timeline_samples = need_u("sample", row.sample)?;
-                stored_samples = Some(need_u("position", row.position)?);
-            }
-            "class" => {
-                let class = need_u("class", row.class.map(|c| c as u64))? as usize;
-                if class != stream.class_names.len() {
-                    return Err(bad(format!("row {}: class rows out of order", line + 2)));
-                }
-                stream
-                    .class_names
-                    .push(row.class_name.clone().unwrap_or_default());
-            }
-            "impact" => {
-                let class = need_u("class", row.class.map(|c| c as u64))? as usize;
-                let fault = row.fault.as_deref().unwrap_or("none");
-                stream.truth.push(Truth {
-                    class,
-                    radius_m: need("radius_m", row.radius_m)?,
-                    speed_m_s: need("speed_m_s", row.speed_m_s)?,
-                    time_s: need("time_s", row.time_s)?,
-                    peak_time_s: need("peak_time_s", row.peak_time_s)?,
-                    peak_sample: need_u("sample", row.sample)?,
-                    peak_force_n: need("peak_force_n", row.peak_force_n)?,
-                    duration_s: need("duration_s", row.duration_s)?,
-                    scale: row.value.unwrap_or(1.0),
-                    fault: ImpactFault::from_name(fault)
-                        .ok_or_else(|| bad(format!("row {}: unknown fault {fault:?}", line + 2)))?,
-                });
-            }
-            "gap" => stream.gaps.push(Gap {
-                position: need_u("position", row.position)? as usize,
-                at_sample: need_u("sample", row.sample)?,
-                lost: need_u("length", row.length)?.min(u32::MAX as u64) as u32,
-            }),
-            "spike" | "stuck" => stream.events.push(FaultEvent {
-                kind: if row.kind == "spike" {
-                    FaultKind::Spike
-                } else {
-                    FaultKind::Stuck
-                },
-                at_sample: need_u("sample", row.sample)?,
-                length: need_u("length", row.length)?.min(u32::MAX as u64) as u32,
-                value: need("value", row.value)?,
-            }),
-            other => return Err(bad(format!("row {}: unknown kind {other:?}", line + 2))),
+        if let Some(stored) = read_row(&mut stream, &row, line + 2).map_err(bad)? {
+            stored_samples = Some(stored);
         }
     }
     if !stream.sample_rate_hz.is_finite() {
@@ -321,4 +263,82 @@ pub fn read_stream(out: &Path) -> Result<Stream, StreamError> {
         return Err(bad("a gap lies past the end of the samples".into()));
     }
     Ok(stream)
+}
+
+/// The little-endian `i16` samples of `bin`.
+fn read_samples(bin: &Path) -> Result<Vec<i16>, StreamError> {
+    let mut bytes = Vec::new();
+    std::fs::File::open(bin)
+        .and_then(|mut f| f.read_to_end(&mut bytes))
+        .map_err(io_err(bin))?;
+    if bytes.len() % 2 != 0 {
+        return Err(StreamError::Format {
+            path: bin.to_path_buf(),
+            message: "odd number of bytes: not a stream of i16 samples".into(),
+        });
+    }
+    Ok(bytes
+        .chunks_exact(2)
+        .map(|c| i16::from_le_bytes([c[0], c[1]]))
+        .collect())
+}
+
+/// Adds truth row `row` (line `line` of the file) to `stream`; for the `stream` row, returns
+/// the stored samples it states. Errors name the line and the missing column.
+fn read_row(stream: &mut Stream, row: &Row, line: usize) -> Result<Option<u64>, String> {
+    let need = |name: &str, v: Option<f64>| {
+        v.ok_or_else(|| format!("row {line}: {} row without {name}", row.kind))
+    };
+    let need_u = |name: &str, v: Option<u64>| need(name, v.map(|x| x as f64)).map(|x| x as u64);
+    match row.kind.as_str() {
+        "stream" => {
+            stream.sample_rate_hz = need("value", row.value)?;
+            stream.phase_s = need("time_s", row.time_s)?;
+            stream.timeline_samples = need_u("sample", row.sample)?;
+            return Ok(Some(need_u("position", row.position)?));
+        }
+        "class" => {
+            let class = need_u("class", row.class.map(|c| c as u64))? as usize;
+            if class != stream.class_names.len() {
+                return Err(format!("row {line}: class rows out of order"));
+            }
+            stream
+                .class_names
+                .push(row.class_name.clone().unwrap_or_default());
+        }
+        "impact" => {
+            let class = need_u("class", row.class.map(|c| c as u64))? as usize;
+            let fault = row.fault.as_deref().unwrap_or("none");
+            stream.truth.push(Truth {
+                class,
+                radius_m: need("radius_m", row.radius_m)?,
+                speed_m_s: need("speed_m_s", row.speed_m_s)?,
+                time_s: need("time_s", row.time_s)?,
+                peak_time_s: need("peak_time_s", row.peak_time_s)?,
+                peak_sample: need_u("sample", row.sample)?,
+                peak_force_n: need("peak_force_n", row.peak_force_n)?,
+                duration_s: need("duration_s", row.duration_s)?,
+                scale: row.value.unwrap_or(1.0),
+                fault: ImpactFault::from_name(fault)
+                    .ok_or_else(|| format!("row {line}: unknown fault {fault:?}"))?,
+            });
+        }
+        "gap" => stream.gaps.push(Gap {
+            position: need_u("position", row.position)? as usize,
+            at_sample: need_u("sample", row.sample)?,
+            lost: need_u("length", row.length)?.min(u32::MAX as u64) as u32,
+        }),
+        "spike" | "stuck" => stream.events.push(FaultEvent {
+            kind: if row.kind == "spike" {
+                FaultKind::Spike
+            } else {
+                FaultKind::Stuck
+            },
+            at_sample: need_u("sample", row.sample)?,
+            length: need_u("length", row.length)?.min(u32::MAX as u64) as u32,
+            value: need("value", row.value)?,
+        }),
+        other => return Err(format!("row {line}: unknown kind {other:?}")),
+    }
+    Ok(None)
 }
