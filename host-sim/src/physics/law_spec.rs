@@ -67,48 +67,47 @@ pub fn adams_for_restitution(
     let zeta = -le / (core::f64::consts::PI.powi(2) + le * le).sqrt();
     let t_c = HERTZ_TC_FACTOR * hz.delta_max_m / speed_m_s;
     let c0 = 2.0 * zeta * mass_kg * core::f64::consts::PI / t_c;
-    let step = 4.0_f64.ln();
-    let (mut a, mut ga) = (c0.ln(), eval(c0.ln())?);
-    let (mut b, mut gb);
-    if ga > 0.0 {
-        // Not damped enough: raise c until e falls below the target.
-        b = a;
-        gb = ga;
-        let mut n = 0;
-        while gb > 0.0 {
-            a = b;
-            ga = gb;
-            b += step;
-            gb = eval(b)?;
-            n += 1;
-            if n > 40 {
-                return Err(SimError::RestitutionNotBracketed {
-                    target: restitution,
-                    reached: gb + restitution,
-                });
-            }
-        }
-    } else {
-        b = a;
-        gb = ga;
-        let mut n = 0;
-        while ga <= 0.0 {
-            b = a;
-            gb = ga;
-            a -= step;
-            ga = eval(a)?;
-            n += 1;
-            if n > 40 {
-                return Err(SimError::RestitutionNotBracketed {
-                    target: restitution,
-                    reached: ga + restitution,
-                });
-            }
-        }
-    }
+    let [(a, ga), (b, gb)] = bracket_decreasing(&eval, c0.ln(), 4.0_f64.ln(), restitution)?;
     // Illinois on [a, b] with ga > 0 >= gb.
     let ln_c = illinois_until(eval, a, ga, b, gb, 1e-9, 1e-13)?;
     Ok(make(ln_c.exp()))
+}
+
+/// A bracket `[(a, g(a)), (b, g(b))]` with `g(a) > 0 >= g(b)` of the decreasing
+/// `g = e - restitution`, stepping `step` from `x0` up (while `g > 0`) or down (while
+/// `g <= 0`), at most 40 steps; else [`SimError::RestitutionNotBracketed`] with the
+/// restitution reached.
+fn bracket_decreasing(
+    g: &dyn Fn(f64) -> Result<f64, SimError>,
+    x0: f64,
+    step: f64,
+    restitution: f64,
+) -> Result<[(f64, f64); 2], SimError> {
+    let (mut a, mut ga) = (x0, g(x0)?);
+    let (mut b, mut gb) = (a, ga);
+    let mut n = 0;
+    // Not damped enough: raise c until e falls below the target; else lower it until it
+    // rises above.
+    let raise = ga > 0.0;
+    while if raise { gb > 0.0 } else { ga <= 0.0 } {
+        if raise {
+            (a, ga) = (b, gb);
+            b += step;
+            gb = g(b)?;
+        } else {
+            (b, gb) = (a, ga);
+            a -= step;
+            ga = g(a)?;
+        }
+        n += 1;
+        if n > 40 {
+            return Err(SimError::RestitutionNotBracketed {
+                target: restitution,
+                reached: if raise { gb } else { ga } + restitution,
+            });
+        }
+    }
+    Ok([(a, ga), (b, gb)])
 }
 
 /// The user's choice of contact law, independent of the scene: the scene file's `[contact]`
