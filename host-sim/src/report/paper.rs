@@ -754,6 +754,18 @@ fn closed_form_check_claim(vs_speed: &[SweepPoint], vs_radius: &[SweepPoint]) ->
 /// N/m^1.5 printed to 5 significant digits like the paper.
 pub fn render_report(res: &PaperResults) -> String {
     let mut s = String::new();
+    table3_text(&mut s, res);
+    let _ = writeln!(s);
+    table2_text(&mut s, res);
+    let _ = writeln!(s);
+    figures_text(&mut s, res);
+    let _ = writeln!(s);
+    claims_text(&mut s, res);
+    s
+}
+
+/// Table 3: `k` against radius, the paper's and ours.
+fn table3_text(s: &mut String, res: &PaperResults) {
     let _ = writeln!(
         s,
         "Table 3  Hertz stiffness k = 4/3 E* sqrt(R) (N/m^1.5), sphere on carbon steel"
@@ -775,7 +787,10 @@ pub fn render_report(res: &PaperResults) -> String {
             r.rel_diff()
         );
     }
-    let _ = writeln!(s);
+}
+
+/// Table 2: the materials and `k` at R = 0.03 m.
+fn table2_text(s: &mut String, res: &PaperResults) {
     let _ = writeln!(s, "Table 2  materials and k at R = 0.03 m");
     let _ = writeln!(
         s,
@@ -800,7 +815,10 @@ pub fn render_report(res: &PaperResults) -> String {
             r.rel_diff()
         );
     }
-    let _ = writeln!(s);
+}
+
+/// The sweeps of Figs 2-11 and each material's damping and peaks at 1 m/s.
+fn figures_text(s: &mut String, res: &PaperResults) {
     let c = &res.config;
     let _ = writeln!(
         s,
@@ -836,7 +854,10 @@ pub fn render_report(res: &PaperResults) -> String {
             );
         }
     }
-    let _ = writeln!(s);
+}
+
+/// The paper's claims, each with whether it holds and the evidence.
+fn claims_text(s: &mut String, res: &PaperResults) {
     let _ = writeln!(s, "Claims of the paper, checked");
     for cl in &res.claims {
         let _ = writeln!(
@@ -847,7 +868,6 @@ pub fn render_report(res: &PaperResults) -> String {
             cl.evidence
         );
     }
-    s
 }
 
 fn write_csv(path: &Path, header: &[&str], rows: &[Vec<String>]) -> anyhow::Result<()> {
@@ -961,45 +981,7 @@ pub(crate) fn draw_svg(
         .label_style(("sans-serif", 15))
         .draw()?;
     for c in curves {
-        let color = c.color;
-        let style = color.stroke_width(2);
-        match c.stroke {
-            Stroke::Solid => {
-                chart
-                    .draw_series(LineSeries::new(c.points.iter().copied(), style))?
-                    .label(c.label.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2))
-                    });
-            }
-            Stroke::Dashed => {
-                chart
-                    .draw_series(DashedLineSeries::new(c.points.iter().copied(), 9, 6, style))?
-                    .label(c.label.as_str())
-                    .legend(move |(x, y)| {
-                        EmptyElement::at((x, y))
-                            + PathElement::new(vec![(0, 0), (9, 0)], color.stroke_width(2))
-                            + PathElement::new(vec![(15, 0), (24, 0)], color.stroke_width(2))
-                    });
-            }
-            Stroke::Markers => {
-                chart
-                    .draw_series(
-                        c.points
-                            .iter()
-                            .step_by(2)
-                            .map(|&p| Circle::new(p, 4, color.stroke_width(1))),
-                    )?
-                    .label(c.label.as_str())
-                    .legend(move |(x, y)| Circle::new((x + 12, y), 4, color.stroke_width(1)));
-            }
-            Stroke::Points => {
-                chart
-                    .draw_series(c.points.iter().map(|&p| Circle::new(p, 5, color.filled())))?
-                    .label(c.label.as_str())
-                    .legend(move |(x, y)| Circle::new((x + 12, y), 5, color.filled()));
-            }
-        }
+        draw_curve(&mut chart, c)?;
     }
     chart
         .configure_series_labels()
@@ -1013,43 +995,105 @@ pub(crate) fn draw_svg(
     Ok(())
 }
 
+/// The axes' coordinate of [`draw_svg`]: a linear range of `f64`.
+type Coord = plotters::coord::types::RangedCoordf64;
+
+/// Draws curve `c` on `chart` in its stroke, with its legend entry.
+fn draw_curve<'a>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<Coord, Coord>>,
+    c: &'a Curve,
+) -> anyhow::Result<()> {
+    let color = c.color;
+    let style = color.stroke_width(2);
+    match c.stroke {
+        Stroke::Solid => {
+            chart
+                .draw_series(LineSeries::new(c.points.iter().copied(), style))?
+                .label(c.label.as_str())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(2))
+                });
+        }
+        Stroke::Dashed => {
+            chart
+                .draw_series(DashedLineSeries::new(c.points.iter().copied(), 9, 6, style))?
+                .label(c.label.as_str())
+                .legend(move |(x, y)| {
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (9, 0)], color.stroke_width(2))
+                        + PathElement::new(vec![(15, 0), (24, 0)], color.stroke_width(2))
+                });
+        }
+        Stroke::Markers => {
+            chart
+                .draw_series(
+                    c.points
+                        .iter()
+                        .step_by(2)
+                        .map(|&p| Circle::new(p, 4, color.stroke_width(1))),
+                )?
+                .label(c.label.as_str())
+                .legend(move |(x, y)| Circle::new((x + 12, y), 4, color.stroke_width(1)));
+        }
+        Stroke::Points => {
+            chart
+                .draw_series(c.points.iter().map(|&p| Circle::new(p, 5, color.filled())))?
+                .label(c.label.as_str())
+                .legend(move |(x, y)| Circle::new((x + 12, y), 5, color.filled()));
+        }
+    }
+    Ok(())
+}
+
+/// The curves of one figure: for sandstone and coal, `y[0]` (Hertz theory, solid), `y[1]` (the
+/// damped Adams IMPACT simulation at restitution `e`, dashed) and `y[2]` (the undamped
+/// integration, circles) against `x`.
+fn figure_curves(
+    e: f64,
+    points: &[SweepPoint],
+    x: fn(&SweepPoint) -> f64,
+    y: [fn(&SweepPoint) -> f64; 3],
+) -> Vec<Curve> {
+    let colors = [
+        ("sandstone", RGBColor(200, 70, 20)),
+        ("coal", RGBColor(20, 20, 20)),
+    ];
+    let mut out = Vec::new();
+    for (name, color) in colors {
+        let p = of(points, name);
+        let series = |f: fn(&SweepPoint) -> f64| p.iter().map(|q| (x(q), f(q))).collect();
+        out.push(Curve {
+            label: format!("{name}, Hertz theory"),
+            points: series(y[0]),
+            color,
+            stroke: Stroke::Solid,
+        });
+        out.push(Curve {
+            label: format!("{name}, Adams IMPACT (e = {e} at 1 m/s)"),
+            points: series(y[1]),
+            color,
+            stroke: Stroke::Dashed,
+        });
+        out.push(Curve {
+            label: format!("{name}, undamped integration"),
+            points: series(y[2]),
+            color,
+            stroke: Stroke::Markers,
+        });
+    }
+    out
+}
+
 /// Writes [`SVG_FILES`] into `dir` (which must exist); returns their paths.
 ///
 /// Each figure has, for sandstone and coal, the closed-form theory (solid), the damped Adams
 /// IMPACT simulation (dashed) and the undamped integration (circles, every other grid point).
 /// Axes: speed in m/s or radius in mm; force in kN, compression in um.
 pub fn write_svgs(res: &PaperResults, dir: &Path) -> anyhow::Result<Vec<PathBuf>> {
-    let colors = [
-        ("sandstone", RGBColor(200, 70, 20)),
-        ("coal", RGBColor(20, 20, 20)),
-    ];
     let e = res.config.restitution;
     let curves =
         |points: &[SweepPoint], x: fn(&SweepPoint) -> f64, y: [fn(&SweepPoint) -> f64; 3]| {
-            let mut out = Vec::new();
-            for (name, color) in colors {
-                let p = of(points, name);
-                let series = |f: fn(&SweepPoint) -> f64| p.iter().map(|q| (x(q), f(q))).collect();
-                out.push(Curve {
-                    label: format!("{name}, Hertz theory"),
-                    points: series(y[0]),
-                    color,
-                    stroke: Stroke::Solid,
-                });
-                out.push(Curve {
-                    label: format!("{name}, Adams IMPACT (e = {e} at 1 m/s)"),
-                    points: series(y[1]),
-                    color,
-                    stroke: Stroke::Dashed,
-                });
-                out.push(Curve {
-                    label: format!("{name}, undamped integration"),
-                    points: series(y[2]),
-                    color,
-                    stroke: Stroke::Markers,
-                });
-            }
-            out
+            figure_curves(e, points, x, y)
         };
     let speed = |p: &SweepPoint| p.speed_m_s;
     let radius_mm = |p: &SweepPoint| p.radius_m * 1e3;
