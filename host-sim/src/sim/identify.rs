@@ -910,16 +910,13 @@ fn jackknifed_modes(
     modes
 }
 
-/// Identifies the chain from `samples` (ADC codes in time order): see the module docs.
-pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identification, IdentifyError> {
-    validate_identify(opts)?;
-    let fs = opts.sample_rate_hz;
-    let raw: Vec<f64> = samples.iter().map(|&v| v as f64).collect();
-    let base = median(&raw);
-    let y: Vec<f64> = raw.iter().map(|v| v - base).collect();
+/// A free window of samples, `[start, end)`.
+type Window = (usize, usize);
 
-    // 1. Pulses and free windows.
-    let pulses = find_pulses(&y, fs);
+/// Step 1 of the module docs: the pulses of `y` (at least 3) and the free windows between
+/// them.
+fn pulses_and_windows(y: &[f64], fs: f64) -> Result<(Vec<PulseSpan>, Vec<Window>), IdentifyError> {
+    let pulses = find_pulses(y, fs);
     if pulses.len() < 3 {
         return Err(IdentifyError::NotEnough(format!(
             "found {} pulses in {} samples; at least 3 are needed",
@@ -928,15 +925,33 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
         )));
     }
     let windows = free_windows(&pulses, y.len());
-    let slices: Vec<&[f64]> = windows.iter().map(|&(s, e)| &y[s..e]).collect();
+    Ok((pulses, windows))
+}
 
-    // 2. Poles: a first pass at lag 1, then at a lag suited to the highest mode.
-    // The order comes from the singular values; `--modes N` picks the `N` strongest modes.
+/// Step 2 of the module docs: the noise, the pencil's Gram matrices at the refined lag and
+/// the modes they resolve.
+struct PoleSearch {
+    /// Noise RMS in counts (given, or the first pass's residual).
+    noise_rms: f64,
+    /// The Gram matrices of the free windows at the refined lag.
+    grams: Grams,
+    /// Every mode `(f in Hz, zeta)` the refined pencil finds.
+    refined: Vec<(f64, f64)>,
+}
+
+/// Poles: a first pass at lag 1, then at a lag suited to the highest mode. The order comes
+/// from the singular values; `--modes N` picks the `N` strongest modes later.
+fn pole_search(
+    slices: &[&[f64]],
+    pulses: usize,
+    opts: &IdentifyOptions,
+    fs: f64,
+) -> Result<PoleSearch, IdentifyError> {
     let rough = matrix_pencil(&slices[1..], 1, MODE_LAGS, 0).ok_or_else(|| {
         IdentifyError::NotEnough(format!(
             "no free ring-down of at least {} samples between the {} pulses",
             2 * MODE_LAGS + 1,
-            pulses.len()
+            pulses
         ))
     })?;
     let noise_rms = opts
@@ -955,6 +970,31 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
     // The refined pencil resolves what the first pass merges (poles crowded near z = 1); its
     // band (a quarter of the lag's Nyquist frequency) holds every mode of the first pass.
     let refined = grams.refine(&grams.total_gram, grams.total_rows);
+    Ok(PoleSearch {
+        noise_rms,
+        grams,
+        refined,
+    })
+}
+
+/// Identifies the chain from `samples` (ADC codes in time order): see the module docs.
+pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identification, IdentifyError> {
+    validate_identify(opts)?;
+    let fs = opts.sample_rate_hz;
+    let raw: Vec<f64> = samples.iter().map(|&v| v as f64).collect();
+    let base = median(&raw);
+    let y: Vec<f64> = raw.iter().map(|v| v - base).collect();
+
+    // 1. Pulses and free windows.
+    let (pulses, windows) = pulses_and_windows(&y, fs)?;
+    let slices: Vec<&[f64]> = windows.iter().map(|&(s, e)| &y[s..e]).collect();
+
+    // 2. Poles.
+    let PoleSearch {
+        noise_rms,
+        grams,
+        refined,
+    } = pole_search(&slices, pulses.len(), opts, fs)?;
     let mut modes_fz = refined.clone();
     modes_fz.sort_by(|a, b| a.0.total_cmp(&b.0));
 
@@ -1015,18 +1055,18 @@ struct ModesSeen<'a> {
     frequencies_hz: &'a [f64],
 }
 
-/// Step 4 of the module docs: the resonance's ring right after each pulse, the modes' fit of
-/// the following window subtracted.
-fn identify_accelerometer(
+/// The ring right after each pulse, from where the pulse has fallen to the noise (or 3 % of
+/// its height) to [`ACCEL_WINDOW`] samples on, with the modes' fit of the following window
+/// subtracted; rings too short for the pencil are left out.
+fn accelerometer_rings(
     y: &[f64],
     pulses: &[PulseSpan],
     windows: &[(usize, usize)],
     fits: &[Option<WindowFit>],
-    modes: &ModesSeen,
+    poles: &[Complex<f64>],
     noise_rms: f64,
     fs: f64,
-) -> Option<ResonanceEstimate> {
-    let poles = modes.poles;
+) -> Vec<Vec<f64>> {
     let mut rings: Vec<Vec<f64>> = Vec::new();
     for (k, p) in pulses.iter().enumerate() {
         let Some(ca) = &fits[k + 1] else {
@@ -1046,6 +1086,21 @@ fn identify_accelerometer(
         }
         rings.push((start..stop).map(|n| y[n] - model(n)).collect());
     }
+    rings
+}
+
+/// Step 4 of the module docs: the resonance's ring right after each pulse, the modes' fit of
+/// the following window subtracted.
+fn identify_accelerometer(
+    y: &[f64],
+    pulses: &[PulseSpan],
+    windows: &[(usize, usize)],
+    fits: &[Option<WindowFit>],
+    modes: &ModesSeen,
+    noise_rms: f64,
+    fs: f64,
+) -> Option<ResonanceEstimate> {
+    let rings = accelerometer_rings(y, pulses, windows, fits, modes.poles, noise_rms, fs);
     let is_mode = |f: f64| {
         modes
             .frequencies_hz
@@ -1109,8 +1164,8 @@ fn fmt_value(v: f64, se: f64) -> String {
 }
 
 impl Identification {
-    /// The `[sensor]` table (identified entries only), with standard errors as comments.
-    pub fn to_toml(&self) -> String {
+    /// The comment lines above the table: what was found, and what is not identified.
+    fn toml_header(&self) -> String {
         let mut s = String::new();
         s.push_str(&format!(
             "# host-sim identify: {} pulses, {} free windows (pencil lag {} samples), gains from \
@@ -1139,6 +1194,12 @@ impl Identification {
                 self.modes.len()
             ));
         }
+        s
+    }
+
+    /// The `[sensor]` table (identified entries only), with standard errors as comments.
+    pub fn to_toml(&self) -> String {
+        let mut s = self.toml_header();
         s.push_str("[sensor]\n");
         s.push_str(&format!("sample_rate_hz = {:?}\n", self.sample_rate_hz));
         s.push_str(&format!(
