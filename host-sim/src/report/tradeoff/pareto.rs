@@ -42,6 +42,30 @@ pub struct ParetoPoint {
     pub on_front: bool,
 }
 
+/// Adds the points `(setting, cost, loss)` of one plot and series to `out`, each marked
+/// whether it is on the series' front.
+fn push_plot(
+    out: &mut Vec<ParetoPoint>,
+    plot: &'static str,
+    series: &str,
+    (cost_unit, loss_unit): (&'static str, &'static str),
+    pts: Vec<(String, f64, f64)>,
+) {
+    let front = pareto_front(&pts.iter().map(|p| (p.1, p.2)).collect::<Vec<_>>());
+    for ((setting, cost, loss), on_front) in pts.into_iter().zip(front) {
+        out.push(ParetoPoint {
+            plot,
+            series: series.to_string(),
+            setting,
+            cost,
+            cost_unit,
+            loss,
+            loss_unit,
+            on_front,
+        });
+    }
+}
+
 impl Tradeoff {
     /// The points of the Pareto plots, with the front of each plot and series:
     /// backend (ns per quiet sample, max rel. error of `F_max`), grid (build us,
@@ -50,24 +74,8 @@ impl Tradeoff {
     /// per second of signal, `1 - forced-choice accuracy`).
     pub fn pareto_points(&self) -> Vec<ParetoPoint> {
         let mut out = Vec::new();
-        let mut push = |plot: &'static str,
-                        series: &str,
-                        cost_unit: &'static str,
-                        loss_unit: &'static str,
-                        pts: Vec<(String, f64, f64)>| {
-            let front = pareto_front(&pts.iter().map(|p| (p.1, p.2)).collect::<Vec<_>>());
-            for ((setting, cost, loss), on_front) in pts.into_iter().zip(front) {
-                out.push(ParetoPoint {
-                    plot,
-                    series: series.to_string(),
-                    setting,
-                    cost,
-                    cost_unit,
-                    loss,
-                    loss_unit,
-                    on_front,
-                });
-            }
+        let mut push = |plot, series: &str, cost_unit, loss_unit, pts| {
+            push_plot(&mut out, plot, series, (cost_unit, loss_unit), pts)
         };
         push(
             "backend",

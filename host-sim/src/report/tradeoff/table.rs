@@ -57,6 +57,16 @@ pub fn render_table(t: &Tradeoff) -> String {
         "| knob | setting | host cost | Cortex-M4F (instructions) | error | accuracy: forced choice (coverage, confident error) |"
     );
     let _ = writeln!(s, "| --- | --- | --- | --- | --- | --- |");
+    backend_lines(&mut s, t);
+    grid_lines(&mut s, t);
+    integrator_lines(&mut s, t);
+    rate_lines(&mut s, t);
+    notes(&mut s, t);
+    s
+}
+
+/// The math backends' rows.
+fn backend_lines(s: &mut String, t: &Tradeoff) {
     for b in &t.backends {
         let _ = writeln!(
             s,
@@ -84,6 +94,10 @@ pub fn render_table(t: &Tradeoff) -> String {
                 .join("; ")
         );
     }
+}
+
+/// The separability grids' rows.
+fn grid_lines(s: &mut String, t: &Tradeoff) {
     for g in &t.grids {
         let _ = writeln!(
             s,
@@ -99,6 +113,10 @@ pub fn render_table(t: &Tradeoff) -> String {
             g.overlap_err
         );
     }
+}
+
+/// The integrator ladder's rows.
+fn integrator_lines(s: &mut String, t: &Tradeoff) {
     for i in &t.integrator {
         let _ = writeln!(
             s,
@@ -111,6 +129,10 @@ pub fn render_table(t: &Tradeoff) -> String {
             i.max_rel_err_duration
         );
     }
+}
+
+/// The sample rates' rows.
+fn rate_lines(s: &mut String, t: &Tradeoff) {
     for (_, rows) in &t.rates {
         for r in rows {
             let _ = writeln!(
@@ -125,6 +147,10 @@ pub fn render_table(t: &Tradeoff) -> String {
             );
         }
     }
+}
+
+/// The notes under the table: the reference separability, the kernel's sizes, the firmware figures' source, refused rates, and the run's sizes.
+fn notes(s: &mut String, t: &Tradeoff) {
     let r = &t.reference;
     let _ = writeln!(s);
     let _ = writeln!(
@@ -151,7 +177,6 @@ pub fn render_table(t: &Tradeoff) -> String {
         "Accuracy: {} impacts per class per evaluation, seed {}; host times: minimum of {} runs.",
         t.config.eval_n_per_class, t.config.seed, t.config.timing_reps
     );
-    s
 }
 
 #[cfg(test)]
