@@ -459,6 +459,46 @@ impl Adc {
 /// `b = (1 + G) u - sum g (q~ + 2 zeta v~)`, `G = sum g`; accelerometer
 /// `y' = w_a v~_a`, `v~_a' = w_a (b - y) - 2 zeta_a w_a v~_a`.
 fn build_linear(spec: &SensorSpec) -> Linear {
+    let Continuous {
+        n,
+        a,
+        b,
+        c,
+        d,
+        weight,
+    } = continuous(spec);
+    let h = 1.0 / (spec.sample_rate_hz * spec.oversample as f64);
+    let (phi, gamma0, gamma1) = first_order_hold(&a, &b, n, h);
+    let t_sample = 1.0 / spec.sample_rate_hz;
+    let a_t: Vec<f64> = a.iter().map(|x| x * t_sample).collect();
+    let phi_sample = expm(&a_t, n);
+    Linear {
+        n,
+        oversample: spec.oversample,
+        phi,
+        gamma0,
+        gamma1,
+        phi_sample,
+        c,
+        d,
+        weight,
+    }
+}
+
+/// The chain's continuous state-space model `x' = A x + B u`, `y = C x + D u` in the scaled
+/// states of [`build_linear`] (`A` row-major, `n x n`), with each state's weight in the
+/// bound of its ringing amplitude.
+struct Continuous {
+    n: usize,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    c: Vec<f64>,
+    d: f64,
+    weight: Vec<f64>,
+}
+
+/// The continuous model of `spec`'s beam modes and accelerometer (see [`build_linear`]).
+fn continuous(spec: &SensorSpec) -> Continuous {
     let two_pi = 2.0 * std::f64::consts::PI;
     let modes = &spec.beam_modes;
     let n = 2 * modes.len() + if spec.accelerometer.is_some() { 2 } else { 0 };
@@ -503,8 +543,20 @@ fn build_linear(spec: &SensorSpec) -> Linear {
         weight[y] = amp;
         weight[v] = amp;
     }
-    let h = 1.0 / (spec.sample_rate_hz * spec.oversample as f64);
-    // Augmented matrix for the first-order hold.
+    Continuous {
+        n,
+        a,
+        b,
+        c,
+        d,
+        weight,
+    }
+}
+
+/// `x' = A x + B u` over a step `h` with `u` linear within it (first-order hold): the
+/// transition `Phi = e^(A h)` and the input gains `Gamma0`, `Gamma1` of `u` at the step's
+/// start and of its slope, from the exponential of the augmented matrix.
+fn first_order_hold(a: &[f64], b: &[f64], n: usize, h: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let m = n + 2;
     let mut aug = vec![0.0; m * m];
     for r in 0..n {
@@ -523,20 +575,7 @@ fn build_linear(spec: &SensorSpec) -> Linear {
         gamma0[r] = e[r * m + n];
         gamma1[r] = e[r * m + n + 1];
     }
-    let t_sample = 1.0 / spec.sample_rate_hz;
-    let a_t: Vec<f64> = a.iter().map(|x| x * t_sample).collect();
-    let phi_sample = expm(&a_t, n);
-    Linear {
-        n,
-        oversample: spec.oversample,
-        phi,
-        gamma0,
-        gamma1,
-        phi_sample,
-        c,
-        d,
-        weight,
-    }
+    (phi, gamma0, gamma1)
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
