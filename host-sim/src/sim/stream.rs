@@ -191,30 +191,6 @@ impl Default for StreamOptions {
 impl StreamOptions {
     /// Checks every option.
     pub fn validate(&self) -> Result<(), StreamError> {
-        let nonneg = |field, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(opt_err(field, format!("must be finite and >= 0 (got {v})")))
-            }
-        };
-        let share = |field, v: f64| {
-            if (0.0..=1.0).contains(&v) {
-                Ok(())
-            } else {
-                Err(opt_err(field, format!("must be in [0, 1] (got {v})")))
-            }
-        };
-        let range = |field, r: [f64; 2]| {
-            if r[0].is_finite() && r[1].is_finite() && r[0] <= r[1] {
-                Ok(())
-            } else {
-                Err(opt_err(
-                    field,
-                    format!("must be finite with min <= max (got [{}, {}])", r[0], r[1]),
-                ))
-            }
-        };
         nonneg("lead_in_s", self.lead_in_s)?;
         nonneg("tail_s", self.tail_s)?;
         range("gap_s", self.gap_s)?;
@@ -233,37 +209,74 @@ impl StreamOptions {
                 format!("must be >= 16 (got {})", self.record_points_per_pulse),
             ));
         }
-        let f = &self.faults;
-        share("saturate_share", f.saturate_share)?;
-        share("drop_share", f.drop_share)?;
+        self.faults.validate()
+    }
+}
+
+impl FaultOptions {
+    /// Checks every fault option: shares in `[0, 1]` (also summed over the faults that share
+    /// an impact or a quiet stretch), the overdrive above 1, the run lengths.
+    pub fn validate(&self) -> Result<(), StreamError> {
+        share("saturate_share", self.saturate_share)?;
+        share("drop_share", self.drop_share)?;
         share(
             "saturate_share + drop_share",
-            f.saturate_share + f.drop_share,
+            self.saturate_share + self.drop_share,
         )?;
-        share("spike_share", f.spike_share)?;
-        share("stuck_share", f.stuck_share)?;
-        share("drop_quiet_share", f.drop_quiet_share)?;
+        share("spike_share", self.spike_share)?;
+        share("stuck_share", self.stuck_share)?;
+        share("drop_quiet_share", self.drop_quiet_share)?;
         share(
             "spike_share + stuck_share + drop_quiet_share",
-            f.spike_share + f.stuck_share + f.drop_quiet_share,
+            self.spike_share + self.stuck_share + self.drop_quiet_share,
         )?;
-        if !(f.saturate_overdrive.is_finite() && f.saturate_overdrive > 1.0) {
+        if !(self.saturate_overdrive.is_finite() && self.saturate_overdrive > 1.0) {
             return Err(opt_err(
                 "saturate_overdrive",
-                format!("must be finite and > 1 (got {})", f.saturate_overdrive),
+                format!("must be finite and > 1 (got {})", self.saturate_overdrive),
             ));
         }
-        range("spike_counts", f.spike_counts)?;
-        if f.stuck_samples < 2 {
+        range("spike_counts", self.spike_counts)?;
+        if self.stuck_samples < 2 {
             return Err(opt_err("stuck_samples", "must be >= 2"));
         }
-        if f.drop_samples < 1 {
+        if self.drop_samples < 1 {
             return Err(opt_err("drop_samples", "must be >= 1"));
         }
-        if !f.drift_counts_per_s.is_finite() {
+        if !self.drift_counts_per_s.is_finite() {
             return Err(opt_err("drift_counts_per_s", "must be finite"));
         }
         Ok(())
+    }
+}
+
+/// `v` finite and `>= 0`.
+fn nonneg(field: &'static str, v: f64) -> Result<(), StreamError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(opt_err(field, format!("must be finite and >= 0 (got {v})")))
+    }
+}
+
+/// `v` a share in `[0, 1]`.
+fn share(field: &'static str, v: f64) -> Result<(), StreamError> {
+    if (0.0..=1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(opt_err(field, format!("must be in [0, 1] (got {v})")))
+    }
+}
+
+/// `r` finite with `r[0] <= r[1]`.
+fn range(field: &'static str, r: [f64; 2]) -> Result<(), StreamError> {
+    if r[0].is_finite() && r[1].is_finite() && r[0] <= r[1] {
+        Ok(())
+    } else {
+        Err(opt_err(
+            field,
+            format!("must be finite with min <= max (got [{}, {}])", r[0], r[1]),
+        ))
     }
 }
 
