@@ -524,116 +524,130 @@ mod tests {
                 continue; // a scene the kernel refuses exports nothing (tested below)
             };
             let text = scene_source(&file, &name).expect("exports");
-            let has = |what: String| {
-                assert!(text.contains(&what), "{name}: `{what}` missing in\n{text}");
-            };
             for lit_text in float_literals(&text) {
                 let v: f32 = lit_text.parse().expect("f32 literal");
                 assert_eq!(format!("{v:?}"), lit_text, "{name}: {lit_text}");
             }
-            has(material(kernel.plate()));
-            // The host's tables (the kernel fills a yielding class's map itself).
-            let cal = SceneCalibration::of(&file).expect("calibration");
-            for m in ratio_maps_to_kernel(&cal.tables)
-                .expect("tables")
-                .iter()
-                .flatten()
-            {
-                has(ratio_map_item(m));
-            }
-            for c in kernel.classes() {
-                if c.prior != 1.0 {
-                    has(format!("prior: {}", lit(c.prior)));
-                }
-                if let Some(p) = c.yield_pressure_pa {
-                    has(format!("yield_pressure_pa: Some({}),", lit(p)));
-                }
-                has(format!("{:?}", c.name.as_str()));
-                has(material(&c.material));
-                has(range(&c.radius_m));
-                has(match c.speed {
-                    Speed::Uniform(r) => format!("Speed::Uniform({})", range(&r)),
-                    Speed::DropHeight(r) => format!("Speed::DropHeight({})", range(&r)),
-                });
-            }
-            let chain = kernel.sensor();
-            assert!(text.contains(&format!("from_plate({}, ", lit(chain.sample_rate_hz))));
-            let s = &file.sensor;
-            let m_over_s = s.effective_mass_kg as f32 / s.counts_per_m_s2 as f32;
-            assert_eq!(m_over_s.to_bits(), chain.force_per_count_n.to_bits());
-            for m in chain.dynamics.modes() {
-                has(format!("frequency_hz: {},", lit(m.frequency_hz)));
-                has(format!("damping_ratio: {},", lit(m.damping_ratio)));
-                has(format!("gain: {},", lit(m.gain)));
-            }
-            assert_eq!(
-                text.contains("with_dynamics_in::<M>"),
-                !chain.dynamics.is_rigid(),
-                "{name}"
-            );
-            // Every setting is written when its bits differ from the default's, else it is the
-            // default's (`..Settings::default()`).
-            let st = kernel.settings();
-            let d = Settings::default();
-            for (field, v, dv) in [
-                ("trigger_sigmas", st.trigger_sigmas, d.trigger_sigmas),
-                ("release_sigmas", st.release_sigmas, d.release_sigmas),
-                ("baseline_tau_s", st.baseline_tau_s, d.baseline_tau_s),
-                ("model_sigma", st.model_sigma, d.model_sigma),
-                (
-                    "confident_error_rate",
-                    st.confident_error_rate,
-                    d.confident_error_rate,
-                ),
-                ("out_sigmas", st.out_sigmas, d.out_sigmas),
-                ("shape_tolerance", st.shape_tolerance, d.shape_tolerance),
-                ("spike_fraction", st.spike_fraction, d.spike_fraction),
-                ("skew_tolerance", st.skew_tolerance, d.skew_tolerance),
-                ("area_ratio", st.area_ratio, d.area_ratio),
-                ("flat_top_ratio", st.flat_top_ratio, d.flat_top_ratio),
-            ] {
-                let written = format!("{field}: {},", lit(v));
-                assert_eq!(
-                    text.contains(&written),
-                    v.to_bits() != dv.to_bits(),
-                    "{name}: {field}"
-                );
-            }
-            for (field, v, dv) in [
-                ("hold_samples", st.hold_samples, d.hold_samples),
-                ("stuck_samples", st.stuck_samples, d.stuck_samples),
-                (
-                    "separability_grid",
-                    st.separability_grid,
-                    d.separability_grid,
-                ),
-            ] {
-                assert_eq!(
-                    text.contains(&format!("{field}: {v},")),
-                    v != dv,
-                    "{name}: {field}"
-                );
-            }
-            // The export writes the scene file's calibration; the kernel adds its chain's
-            // residual (`coalshock::chain_residual`) when it builds the scene, on the node too.
-            let c = crate::bridge::kernel_scene::calibrated_settings(&file)
-                .expect("settings")
-                .contact;
-            if contact_is_default(&c) {
-                assert!(!text.contains("ContactCalibration"), "{name}");
-            } else {
-                // Whatever the literal names is imported.
-                assert!(text.contains(" SampledCalibration,"), "{name}");
-                for (field, v) in [
-                    ("force_ratio", c.force_ratio),
-                    ("duration_ratio", c.duration_ratio),
-                    ("shape_ratio", c.shape_ratio),
-                    ("skewness", c.skewness),
-                ] {
-                    has(format!("{field}: {},", lit(v)));
-                }
-            }
+            parts_are_written(&name, &file, &kernel, &text);
+            settings_are_written(&name, &file, &kernel, &text);
             assert!(text.contains("Settings::default()"), "{name}");
+        }
+    }
+
+    /// The plate, the host's ratio tables, the classes and the chain of `kernel` in `text`.
+    fn parts_are_written(name: &str, file: &SceneFile, kernel: &coalshock::Scene, text: &str) {
+        let has = |what: String| {
+            assert!(text.contains(&what), "{name}: `{what}` missing in\n{text}");
+        };
+        has(material(kernel.plate()));
+        // The host's tables (the kernel fills a yielding class's map itself).
+        let cal = SceneCalibration::of(file).expect("calibration");
+        for m in ratio_maps_to_kernel(&cal.tables)
+            .expect("tables")
+            .iter()
+            .flatten()
+        {
+            has(ratio_map_item(m));
+        }
+        for c in kernel.classes() {
+            if c.prior != 1.0 {
+                has(format!("prior: {}", lit(c.prior)));
+            }
+            if let Some(p) = c.yield_pressure_pa {
+                has(format!("yield_pressure_pa: Some({}),", lit(p)));
+            }
+            has(format!("{:?}", c.name.as_str()));
+            has(material(&c.material));
+            has(range(&c.radius_m));
+            has(match c.speed {
+                Speed::Uniform(r) => format!("Speed::Uniform({})", range(&r)),
+                Speed::DropHeight(r) => format!("Speed::DropHeight({})", range(&r)),
+            });
+        }
+        let chain = kernel.sensor();
+        assert!(text.contains(&format!("from_plate({}, ", lit(chain.sample_rate_hz))));
+        let s = &file.sensor;
+        let m_over_s = s.effective_mass_kg as f32 / s.counts_per_m_s2 as f32;
+        assert_eq!(m_over_s.to_bits(), chain.force_per_count_n.to_bits());
+        for m in chain.dynamics.modes() {
+            has(format!("frequency_hz: {},", lit(m.frequency_hz)));
+            has(format!("damping_ratio: {},", lit(m.damping_ratio)));
+            has(format!("gain: {},", lit(m.gain)));
+        }
+        assert_eq!(
+            text.contains("with_dynamics_in::<M>"),
+            !chain.dynamics.is_rigid(),
+            "{name}"
+        );
+    }
+
+    /// Every setting of `kernel` in `text` when its bits differ from the default's, and the
+    /// contact calibration of the scene file.
+    fn settings_are_written(name: &str, file: &SceneFile, kernel: &coalshock::Scene, text: &str) {
+        let has = |what: String| {
+            assert!(text.contains(&what), "{name}: `{what}` missing in\n{text}");
+        };
+        // Every setting is written when its bits differ from the default's, else it is the
+        // default's (`..Settings::default()`).
+        let st = kernel.settings();
+        let d = Settings::default();
+        for (field, v, dv) in [
+            ("trigger_sigmas", st.trigger_sigmas, d.trigger_sigmas),
+            ("release_sigmas", st.release_sigmas, d.release_sigmas),
+            ("baseline_tau_s", st.baseline_tau_s, d.baseline_tau_s),
+            ("model_sigma", st.model_sigma, d.model_sigma),
+            (
+                "confident_error_rate",
+                st.confident_error_rate,
+                d.confident_error_rate,
+            ),
+            ("out_sigmas", st.out_sigmas, d.out_sigmas),
+            ("shape_tolerance", st.shape_tolerance, d.shape_tolerance),
+            ("spike_fraction", st.spike_fraction, d.spike_fraction),
+            ("skew_tolerance", st.skew_tolerance, d.skew_tolerance),
+            ("area_ratio", st.area_ratio, d.area_ratio),
+            ("flat_top_ratio", st.flat_top_ratio, d.flat_top_ratio),
+        ] {
+            let written = format!("{field}: {},", lit(v));
+            assert_eq!(
+                text.contains(&written),
+                v.to_bits() != dv.to_bits(),
+                "{name}: {field}"
+            );
+        }
+        for (field, v, dv) in [
+            ("hold_samples", st.hold_samples, d.hold_samples),
+            ("stuck_samples", st.stuck_samples, d.stuck_samples),
+            (
+                "separability_grid",
+                st.separability_grid,
+                d.separability_grid,
+            ),
+        ] {
+            assert_eq!(
+                text.contains(&format!("{field}: {v},")),
+                v != dv,
+                "{name}: {field}"
+            );
+        }
+        // The export writes the scene file's calibration; the kernel adds its chain's
+        // residual (`coalshock::chain_residual`) when it builds the scene, on the node too.
+        let c = crate::bridge::kernel_scene::calibrated_settings(file)
+            .expect("settings")
+            .contact;
+        if contact_is_default(&c) {
+            assert!(!text.contains("ContactCalibration"), "{name}");
+        } else {
+            // Whatever the literal names is imported.
+            assert!(text.contains(" SampledCalibration,"), "{name}");
+            for (field, v) in [
+                ("force_ratio", c.force_ratio),
+                ("duration_ratio", c.duration_ratio),
+                ("shape_ratio", c.shape_ratio),
+                ("skewness", c.skewness),
+            ] {
+                has(format!("{field}: {},", lit(v)));
+            }
         }
     }
 
