@@ -29,7 +29,9 @@ pub struct Measurement {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum RejectReason {
-    /// A sample reached the ADC's full scale: the peak is clipped.
+    /// A sample reached the ADC's full scale, and the pulse could not be measured from its
+    /// unclipped flanks (too few left, a damped contact, a chain, or a fit that does not
+    /// describe it), or a flat top clipped below full scale.
     Saturated,
     /// One sample stands alone above the threshold (EMI spike, not an impact).
     Spike,
@@ -188,7 +190,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let lt = M::ln(m.duration_s);
         // The duration is the area over the peak: an error of the measured `ln F_max` comes
         // with its opposite in `ln t_c` (the model's tolerance does not).
-        let cov = finite_or(m.cov_ln).clamp(-(sf * st), sf * st);
+        let cov = finite_or(m.cov_ln).max(-(sf * st)).min(sf * st);
         let noise = NoiseXy::new::<M>(sf, st, cov);
         let bias = self.chain_bias().bias_ln_force(lt);
         let wide = noise.with_chain_bias::<M>(bias);

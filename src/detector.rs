@@ -30,6 +30,10 @@
 //!   `max(3, n / 20)` (times `Settings::flat_top_ratio` for a contact with a broader top) or
 //!   more consecutive samples equal to the pulse's largest one, on a sensor with at least one
 //!   count of noise, is a clipped top: `Saturated`.
+//! - Clipped at the ADC's full scale: the two samples before the first clipped one and the two
+//!   after the last give `F_max` and `t_c` by the least-squares fit of the Hertz shape to
+//!   them ([`flank_fit`], `Detector::measure_clipped`), with their sigmas from the fit; a
+//!   pulse whose flanks are too short or that the fit does not describe stays `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the trigger level (times the weight), so
@@ -57,7 +61,9 @@ use crate::scene::Scene;
 /// Samples kept before the trigger and added to the pulse.
 pub const PRE_TRIGGER: usize = 32;
 
-pub use crate::shape_fit::{C_AREA, C_ENERGY, PEAK_OMEGA, PeakFit, peak_fit, shape_fit};
+pub use crate::shape_fit::{
+    C_AREA, C_ENERGY, FlankFit, PEAK_OMEGA, PeakFit, flank_fit, peak_fit, shape_fit,
+};
 
 pub use crate::scene::MIN_DURATION_SAMPLES;
 
@@ -76,6 +82,11 @@ pub const FIT_FORCE: f32 = 0.15;
 
 /// The shape fit's own error of `ln t_c`, `FIT_DURATION n^-2.5` (see [`FIT_FORCE`]).
 pub const FIT_DURATION: f32 = 0.65;
+
+/// The flank fit's own error of `ln F_max` and `ln t_c` (standard deviation) beside the
+/// noise: its template, [`crate::shape_fit::peak_shape`], is within 1e-4 of the pulse's shape
+/// out to [`crate::shape_fit::FLANK_REACH`].
+pub const FLANK_FLOOR: f32 = 1e-4;
 
 /// Longest box filter over the top of a pulse (samples).
 pub const SMOOTH_MAX: usize = 16;
@@ -140,6 +151,12 @@ struct Pulse {
     /// The two samples after the largest, as far as they came (`after_count`).
     after_max: [f32; 2],
     after_count: u8,
+    /// Samples at the ADC's full scale, and whether one sat at its low end.
+    clipped: u16,
+    low_clip: bool,
+    /// The two samples after the last one at full scale, as far as they came.
+    after_clip: [f32; 2],
+    after_clip_count: u8,
     last: f32,
     valley: f32,
     above_trigger: u32,
@@ -178,6 +195,10 @@ impl Pulse {
         before_max: [0.0; 2],
         after_max: [0.0; 2],
         after_count: 0,
+        clipped: 0,
+        low_clip: false,
+        after_clip: [0.0; 2],
+        after_clip_count: 0,
         last: 0.0,
         valley: 0.0,
         above_trigger: 0,
@@ -769,8 +790,16 @@ impl<M: Backend> Detector<M> {
         // Second difference at the previous sample.
         p.min_curvature = p.min_curvature.min(p.prev + v - 2.0 * p.last);
         p.prev = p.last;
-        if sample >= self.adc_max || sample <= self.adc_min {
+        if sample >= self.adc_max {
             p.saturated = true;
+            p.clipped = p.clipped.saturating_add(1);
+            p.after_clip_count = 0;
+        } else if sample <= self.adc_min {
+            p.saturated = true;
+            p.low_clip = true;
+        } else if let Some(slot) = p.after_clip.get_mut(p.after_clip_count as usize) {
+            *slot = v;
+            p.after_clip_count += 1;
         }
         // Runs at the largest raw sample (a clipped top is flat in what the ADC gave).
         if sample > p.top {
@@ -880,7 +909,7 @@ impl<M: Backend> Detector<M> {
             outcome: Err(r),
         };
         if p.saturated {
-            return reject(RejectReason::Saturated);
+            return self.measure_clipped();
         }
         let [before2, before] = p.before_max;
         let [after, after2] = p.after_max;
@@ -994,6 +1023,52 @@ impl<M: Backend> Detector<M> {
                 sigma_ln_force,
                 sigma_ln_duration,
                 cov_ln: shared - sigma_ln_force * sigma_ln_force,
+            }),
+        }
+    }
+
+    /// A pulse with samples at the ADC's full scale, measured from its unclipped flanks
+    /// ([`flank_fit`]) when the clipped samples are one run at the top of an undamped
+    /// pulse on a rigid chain, with two samples either side of the run; otherwise `Saturated`.
+    /// Its sigmas are the fit's, from the noise and the four samples; the shape and skewness
+    /// checks, which a clipped top fails, are not made.
+    #[cold]
+    #[inline(never)]
+    fn measure_clipped(&self) -> Detection {
+        let p = &self.pulse;
+        let at_sample = p.max_at;
+        let reject = Detection::Pulse {
+            at_sample,
+            outcome: Err(RejectReason::Saturated),
+        };
+        let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
+        let plain = self.ring_weight <= 0.0 && self.skewness == 0.0 && self.shape_ratio == 1.0;
+        #[cfg(feature = "plasticity")]
+        let plain = plain && self.area_ratio == 1.0;
+        if !(whole && plain && p.after_clip_count >= 2 && p.clipped == p.flat) {
+            return reject;
+        }
+        let Some(fit) = flank_fit(
+            p.before_max,
+            p.clipped as f32,
+            p.after_clip,
+            p.max,
+            p.sum,
+            self.noise,
+        ) else {
+            return reject;
+        };
+        // The template's own error (the series, 1e-4 of `g` at the reach) beside the noise.
+        let (noise2, floor2) = (self.noise * self.noise, FLANK_FLOOR * FLANK_FLOOR);
+        let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
+        Detection::Pulse {
+            at_sample,
+            outcome: Ok(Measurement {
+                peak_force_n: fit.peak * self.force_per_count_n,
+                duration_s: fit.duration * self.dt_s,
+                sigma_ln_force: M::sqrt(f2 + floor2),
+                sigma_ln_duration: M::sqrt(t2 + floor2),
+                cov_ln: cov,
             }),
         }
     }
