@@ -190,7 +190,8 @@ fn fit(n: f32, phase: f32, aliases: &[(C, f32); 2], weights: Option<&[C]>) -> Op
     let (i, _) = (2..AROUND - 2)
         .filter_map(|i| y.get(i).map(|&v| (i, v)))
         .fold((3, f32::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
-    let (f, t) = shape_fit::<M>(five_about(&y, i), sum)?;
+    // The detector's fit for the undamped Hertz pulse this models.
+    let (f, t) = shape_fit::<M>(five_about(&y, i), sum, true)?;
     Some([f, t])
 }
 

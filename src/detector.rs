@@ -38,7 +38,8 @@
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the trigger level (times the weight), so
 //!   a negative EMI spike cannot drag it down.
-//! - Peak between samples ([`peak_fit`]): from 8 samples per pulse, the least-squares fit of
+//! - Peak between samples ([`peak_fit`]): for the undamped Hertz contact (a scene without a
+//!   contact calibration) from 8 samples per pulse, the least-squares fit of
 //!   the Hertz pulse's shape about its top to the five samples about the largest, in the
 //!   peak, its time and its width (the largest of single noisy samples is biased high by
 //!   the noise, +0.009 in `ln F_max` at 40 counts RMS; the fit's bias is second order, and its
@@ -56,7 +57,7 @@
 use crate::classifier::{Measurement, RejectReason};
 use crate::equaliser::Pairs;
 use crate::math::{Backend, DefaultBackend};
-use crate::scene::Scene;
+use crate::scene::{ContactCalibration, Scene};
 
 /// Samples kept before the trigger and added to the pulse.
 pub const PRE_TRIGGER: usize = 32;
@@ -260,6 +261,9 @@ pub struct Detector<M: Backend = DefaultBackend> {
     #[cfg(feature = "plasticity")]
     flat_top_ratio: f32,
     spike_fraction: f32,
+    /// The contact is the undamped Hertz law (no calibration): its pulses are read with the
+    /// Hertz shape through five samples, and a clipped one from its flanks.
+    hertz: bool,
     hold: u16,
     max_samples: u32,
     alpha: f32,
@@ -324,6 +328,7 @@ impl<M: Backend> Detector<M> {
             #[cfg(feature = "plasticity")]
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
+            hertz: s.contact == ContactCalibration::HERTZ && plain_area(s),
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -938,7 +943,7 @@ impl<M: Backend> Detector<M> {
                 weight_sum: 1.0,
             })
         } else {
-            peak_fit::<M>([before2, before, p.max, after, after2], p.sum)
+            peak_fit::<M>([before2, before, p.max, after, after2], p.sum, self.hertz)
         };
         let Some(PeakFit {
             peak,
@@ -1042,9 +1047,7 @@ impl<M: Backend> Detector<M> {
             outcome: Err(RejectReason::Saturated),
         };
         let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
-        let plain = self.ring_weight <= 0.0 && self.skewness == 0.0 && self.shape_ratio == 1.0;
-        #[cfg(feature = "plasticity")]
-        let plain = plain && self.area_ratio == 1.0;
+        let plain = self.ring_weight <= 0.0 && self.hertz;
         if !(whole && plain && p.after_clip_count >= 2 && p.clipped == p.flat) {
             return reject;
         }
@@ -1072,6 +1075,18 @@ impl<M: Backend> Detector<M> {
             }),
         }
     }
+}
+
+/// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).
+#[cfg(feature = "plasticity")]
+fn plain_area(s: &crate::scene::Settings) -> bool {
+    s.area_ratio == 1.0 && s.flat_top_ratio == 1.0
+}
+
+/// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).
+#[cfg(not(feature = "plasticity"))]
+fn plain_area(_: &crate::scene::Settings) -> bool {
+    true
 }
 
 /// One quiet sample `v` into the scaled mean square `sum` (`ms (1 - w) / w`, see

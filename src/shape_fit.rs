@@ -89,14 +89,16 @@ pub fn five_about(y: &[f32], i: usize) -> [f32; 5] {
 /// Peak (counts) and duration (samples) of a sampled Hertz pulse from its five samples about
 /// the largest, `top = [y_-2, y_-1, y_0, y_1, y_2]` (`y_0` the largest), and the sum of all its
 /// samples; `None` when they are not a positive pulse. See [`peak_fit`].
-pub fn shape_fit<M: Backend>(top: [f32; 5], sum: f32) -> Option<(f32, f32)> {
-    peak_fit::<M>(top, sum).map(|f| (f.peak, f.duration))
+pub fn shape_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<(f32, f32)> {
+    peak_fit::<M>(top, sum, five).map(|f| (f.peak, f.duration))
 }
 
 /// The fit behind [`shape_fit`], with its noise gains. `F_max` and `t_c = sum / (C_AREA
 /// F_max)` are iterated three times; with the phase step `d = PEAK_OMEGA / t_c` per sample:
 ///
-/// - `d <= FIVE_POINT_STEP` (7.8 samples per pulse or more): Gauss-Newton steps of the
+/// - `five` (the contact is the undamped Hertz law, whose shape the fit takes; a damped or
+///   yielding contact's pulse is not that shape, and its calibration reads it as below) and
+///   `d <= FIVE_POINT_STEP` (7.8 samples per pulse or more): Gauss-Newton steps of the
 ///   least-squares fit of `F_max g(d (k - k_peak))` ([`peak_shape`]) to the five samples, in
 ///   `F_max`, the offset `k_peak` and the phase step `d` (two Gauss-Newton steps from the
 ///   three samples' peak). The largest
@@ -106,7 +108,7 @@ pub fn shape_fit<M: Backend>(top: [f32; 5], sum: f32) -> Option<(f32, f32)> {
 ///   frequency, so `z_0` and its larger neighbour `z_1` give the offset `theta` of the true
 ///   peak, `tan theta = (z_1/z_0 - cos d) / sin d`, and `F_max = (z_0 / cos theta)^(3/2)` with
 ///   `|theta| <= d/2`.
-pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32) -> Option<PeakFit> {
+pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<PeakFit> {
     let [_, before, y0, after, _] = top;
     if !(y0 > 0.0 && sum > 0.0 && y0.is_finite() && sum.is_finite()) {
         return None;
@@ -124,7 +126,7 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32) -> Option<PeakFit> {
         fit.duration = sum / (C_AREA * fit.peak);
     }
     let d = step(fit.duration);
-    if d <= FIVE_POINT_STEP {
+    if five && d <= FIVE_POINT_STEP {
         let mut p = [fit.peak, 0.0, d];
         for _ in 0..2 {
             let Some(gains) = five_point(&top, &mut p, d) else {
@@ -181,6 +183,7 @@ fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32
 /// `ts` (samples from the peak) with values `ys`: `[n11, n12, n13, n22, n23, n33]`, the right
 /// side `b` and the column sums `c` of the columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'`
 /// and `dm/dd = F_max t g'`.
+#[inline(never)]
 fn normal_equations(ts: &[f32], ys: &[f32], peak: f32, d: f32) -> ([f32; 6], [f32; 3], [f32; 3]) {
     let (mut n, mut b, mut c) = ([0.0f32; 6], [0.0f32; 3], [0.0f32; 3]);
     for (&t, &y) in ts.iter().zip(ys) {
@@ -243,6 +246,7 @@ pub struct FlankFit {
 /// flank sample beyond [`FLANK_REACH`], `d` at the end of its range, the peak outside the
 /// clipped run, the fitted pulse below the level (less four `noise` RMS) at the run's ends,
 /// or the four samples' residual above `4 noise` RMS (with `1e-4 F_max` for the template).
+#[inline(never)]
 pub fn flank_fit(
     before: [f32; 2],
     run: f32,

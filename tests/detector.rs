@@ -76,7 +76,7 @@ fn fit_errors(spp: f64) -> (f64, f64) {
             .unwrap();
         let sum: f64 = ys.iter().sum();
         let y32: Vec<f32> = ys.iter().map(|&y| y as f32).collect();
-        let (p, d) = shape_fit::<DefaultBackend>(five_about(&y32, imax), sum as f32).unwrap();
+        let (p, d) = shape_fit::<DefaultBackend>(five_about(&y32, imax), sum as f32, true).unwrap();
         ep = ep.max((p as f64 / 1000.0 - 1.0).abs());
         ed = ed.max((d as f64 / spp - 1.0).abs());
     }

@@ -36,7 +36,7 @@ fn fitted(chain: &SensorSpec, n: f64, phase: f64) -> (f64, f64) {
         .max_by(|a, b| a.1.total_cmp(b.1))
         .unwrap();
     let sum: f32 = pulse.iter().sum();
-    let (f, t) = shape_fit::<Libm>(five_about(pulse, i), sum).unwrap();
+    let (f, t) = shape_fit::<Libm>(five_about(pulse, i), sum, true).unwrap();
     ((f as f64).ln(), (t as f64).ln())
 }
 

@@ -117,7 +117,8 @@ fn fit_sampled(series: &[(f64, f64)], dt: f64, phase: usize) -> Option<(f64, f64
     let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
     let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
-    let (peak, samples) = shape_fit::<Libm>(five_about(&v32, i), sum as f32)?;
+    // A calibrated (damped or yielding) contact's pulses are read with three samples.
+    let (peak, samples) = shape_fit::<Libm>(five_about(&v32, i), sum as f32, false)?;
     Some((peak as f64, samples as f64))
 }
 
