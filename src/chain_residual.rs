@@ -18,7 +18,7 @@
 //! `sum_j y(x_j) = n S1(0) + 2 n sum_(m >= 1) Re(H(j 2 pi m f_s) e^(j 2 pi m n x_0)) S1(2 pi m n)`.
 //!
 //! The rigid pulse has the same with `R = 1` and `H = 1`. [`crate::shape_fit::shape_fit`] reads each
-//! (the largest sample, its larger neighbour and the sum), at [`PHASES`] sample phases; the
+//! (the largest sample, two samples either side of it and the sum), at [`PHASES`] sample phases; the
 //! mean over phases of `ln(fit of y / fit of P)` is the bias, and its spread over phases
 //! joins the measurement's noise. The integral is a trapezoid rule in `v`, step
 //! [`crate::chain_bias::STEP_V`] up to [`crate::chain_bias::MAX_V`], as the chain's bound takes
@@ -36,7 +36,7 @@ use crate::complex::{C, cis};
 use crate::equaliser::{ChainDynamics, EqualiserDesign};
 use crate::math::{self, Backend, Libm as M};
 use crate::sampled::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
-use crate::shape_fit::shape_fit;
+use crate::shape_fit::{five_about, shape_fit};
 
 /// Sample phases averaged per point.
 pub const PHASES: usize = 8;
@@ -44,8 +44,9 @@ pub const PHASES: usize = 8;
 /// Samples per pulse from which the residual is taken as 0 (see the module docs).
 pub const SMOOTH_FROM_SAMPLES: f32 = 24.0;
 
-/// Samples computed around the peak: offsets `-2..=2` from the sample nearest it.
-const AROUND: usize = 5;
+/// Samples computed around the peak: offsets `-3..=3` from the sample nearest it (the
+/// largest is within one of it, and the fit takes two either side of the largest).
+const AROUND: usize = 7;
 
 /// The equaliser's residual bias at each point `n_k` of a [`SampledCalibration`], for
 /// `dynamics` equalised by `design` at `sample_rate_hz`; [`SampledCalibration::NONE`] for
@@ -177,7 +178,7 @@ fn shape(x: f32) -> f32 {
 fn fit(n: f32, phase: f32, aliases: &[(C, f32); 2], weights: Option<&[C]>) -> Option<[f32; 2]> {
     let mut y = [0.0f32; AROUND];
     for (j, slot) in y.iter_mut().enumerate() {
-        let x = (j as f32 - 2.0 + phase) / n;
+        let x = (j as f32 - 3.0 + phase) / n;
         *slot = shape(x) + weights.map_or(0.0, |w| residual_at(w, x));
     }
     let mut sum = n * HERTZ_SPECTRUM.first().copied().unwrap_or(0.0);
@@ -186,12 +187,11 @@ fn fit(n: f32, phase: f32, aliases: &[(C, f32); 2], weights: Option<&[C]>) -> Op
         let h = if weights.is_some() { h1 } else { C::default() };
         sum += 2.0 * n * s1 * turn.add(h.mul(turn)).re;
     }
-    let (i, top) = (1..AROUND - 1)
+    let (i, _) = (2..AROUND - 2)
         .filter_map(|i| y.get(i).map(|&v| (i, v)))
-        .fold((2, f32::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
-    let before = y.get(i - 1).copied().unwrap_or(0.0);
-    let after = y.get(i + 1).copied().unwrap_or(0.0);
-    let (f, t) = shape_fit::<M>(top, before, after, sum)?;
+        .fold((3, f32::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+    // The detector's fit for the undamped Hertz pulse this models.
+    let (f, t) = shape_fit::<M>(five_about(&y, i), sum, true)?;
     Some([f, t])
 }
 

@@ -18,13 +18,20 @@ pub struct Measurement {
     pub sigma_ln_force: f32,
     /// Standard deviation of `ln t_c`.
     pub sigma_ln_duration: f32,
+    /// Covariance of `ln F_max` and `ln t_c` (log units squared). The duration is the area over
+    /// the peak, `ln t_c = ln sum - ln F_max + const`, so it is `cov(ln sum, ln F_max) -
+    /// sigma_ln_force^2`: about `-sigma_ln_force^2` when the peak and the area share little
+    /// noise.
+    pub cov_ln: f32,
 }
 
 /// Why a pulse got no class at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum RejectReason {
-    /// A sample reached the ADC's full scale: the peak is clipped.
+    /// A sample reached the ADC's full scale, and the pulse could not be measured from its
+    /// unclipped flanks (too few left, a damped contact, a chain, or a fit that does not
+    /// describe it), or a flat top clipped below full scale.
     Saturated,
     /// One sample stands alone above the threshold (EMI spike, not an impact).
     Spike,
@@ -156,7 +163,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// use coalshock::{Measurement, Scene, Verdict};
     /// let scene: Scene = Scene::paper().unwrap();
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
-    ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01 };
+    ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
+    ///                       cov_ln: -1e-4 };
     /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
@@ -182,7 +190,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let lt = M::ln(m.duration_s);
         // The duration is the area over the peak: an error of the measured `ln F_max` comes
         // with its opposite in `ln t_c` (the model's tolerance does not).
-        let cov = -(a * a).min(sf * st);
+        let cov = finite_or(m.cov_ln).max(-(sf * st)).min(sf * st);
         let noise = NoiseXy::new::<M>(sf, st, cov);
         let bias = self.chain_bias().bias_ln_force(lt);
         let wide = noise.with_chain_bias::<M>(bias);
@@ -288,6 +296,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             duration_s: m.duration_s / (c.duration_ratio * M::exp(lt)),
             sigma_ln_force: quad(m.sigma_ln_force, sf),
             sigma_ln_duration: quad(m.sigma_ln_duration, st),
+            // The calibration's spread of the peak comes back opposite in the duration too.
+            cov_ln: m.cov_ln - sf * sf,
         }
     }
 }

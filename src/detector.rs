@@ -30,16 +30,23 @@
 //!   `max(3, n / 20)` (times `Settings::flat_top_ratio` for a contact with a broader top) or
 //!   more consecutive samples equal to the pulse's largest one, on a sensor with at least one
 //!   count of noise, is a clipped top: `Saturated`.
+//! - Clipped at the ADC's full scale: the two samples before the first clipped one and the two
+//!   after the last give `F_max` and `t_c` by the least-squares fit of the Hertz shape to
+//!   them ([`flank_fit`], `Detector::measure_clipped`), with their sigmas from the fit; a
+//!   pulse whose flanks are too short or that the fit does not describe stays `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the trigger level (times the weight), so
 //!   a negative EMI spike cannot drag it down.
-//! - Peak between samples: `z = F^(2/3) = F_max^(2/3) sin(pi t / t_c)` is an exact sinusoid of
-//!   known frequency once `t_c` is known, so the maximum sample `z0` and its larger neighbour
-//!   `z1` give the offset `theta` of the true peak, `tan theta = (z1/z0 - cos D) / sin D`
-//!   (`D = pi dt / t_c`), and `F_max = (z0 / cos theta)^(3/2)` with `|theta| <= D/2`. Below
-//!   `D = 0.3` (more than ~10 samples per pulse) a parabola through three `z` samples is used.
-//!   `F_max` and `t_c` are iterated three times.
+//! - Peak between samples ([`peak_fit`]): for the undamped Hertz contact (a scene without a
+//!   contact calibration) from 8 samples per pulse, the least-squares fit of
+//!   the Hertz pulse's shape about its top to the five samples about the largest, in the
+//!   peak, its time and its width (the largest of single noisy samples is biased high by
+//!   the noise, +0.009 in `ln F_max` at 40 counts RMS; the fit's bias is second order, and its
+//!   noise about 30 % smaller); below, `z = F^(2/3) = F_max^(2/3) sin(pi t / t_c)` as a
+//!   sinusoid of known frequency through the largest sample and its larger neighbour,
+//!   `F_max` and `t_c` iterated three times. The fit reports its noise gain and what noise it
+//!   shares with the area, and the noise model carries both.
 //! - Long pulses (a scene whose shortest pulse has 24 samples or more): the peak is the
 //!   largest mean of `w` consecutive samples (`w` odd, up to an eighth of the shortest pulse,
 //!   at most 15), corrected for the pulse's own curvature over the window ([`smooth_fit`]):
@@ -50,12 +57,14 @@
 use crate::classifier::{Measurement, RejectReason};
 use crate::equaliser::Pairs;
 use crate::math::{Backend, DefaultBackend};
-use crate::scene::Scene;
+use crate::scene::{ContactCalibration, Scene};
 
 /// Samples kept before the trigger and added to the pulse.
 pub const PRE_TRIGGER: usize = 32;
 
-pub use crate::shape_fit::{C_AREA, C_ENERGY, PEAK_OMEGA, shape_fit};
+pub use crate::shape_fit::{
+    C_AREA, C_ENERGY, FlankFit, PEAK_OMEGA, PeakFit, flank_fit, peak_fit, shape_fit,
+};
 
 pub use crate::scene::MIN_DURATION_SAMPLES;
 
@@ -74,6 +83,11 @@ pub const FIT_FORCE: f32 = 0.15;
 
 /// The shape fit's own error of `ln t_c`, `FIT_DURATION n^-2.5` (see [`FIT_FORCE`]).
 pub const FIT_DURATION: f32 = 0.65;
+
+/// The flank fit's own error of `ln F_max` and `ln t_c` (standard deviation) beside the
+/// noise: its template, [`crate::shape_fit::peak_shape`], is within 1e-4 of the pulse's shape
+/// out to [`crate::shape_fit::FLANK_REACH`].
+pub const FLANK_FLOOR: f32 = 1e-4;
 
 /// Longest box filter over the top of a pulse (samples).
 pub const SMOOTH_MAX: usize = 16;
@@ -133,9 +147,17 @@ struct Pulse {
     drift: bool,
     max: f32,
     max_at: u64,
-    before_max: f32,
-    after_max: f32,
-    after_known: bool,
+    /// The two samples before the largest, oldest first.
+    before_max: [f32; 2],
+    /// The two samples after the largest, as far as they came (`after_count`).
+    after_max: [f32; 2],
+    after_count: u8,
+    /// Samples at the ADC's full scale, and whether one sat at its low end.
+    clipped: u16,
+    low_clip: bool,
+    /// The two samples after the last one at full scale, as far as they came.
+    after_clip: [f32; 2],
+    after_clip_count: u8,
     last: f32,
     valley: f32,
     above_trigger: u32,
@@ -171,9 +193,13 @@ impl Pulse {
         drift: false,
         max: f32::NEG_INFINITY,
         max_at: 0,
-        before_max: 0.0,
-        after_max: 0.0,
-        after_known: false,
+        before_max: [0.0; 2],
+        after_max: [0.0; 2],
+        after_count: 0,
+        clipped: 0,
+        low_clip: false,
+        after_clip: [0.0; 2],
+        after_clip_count: 0,
         last: 0.0,
         valley: 0.0,
         above_trigger: 0,
@@ -235,6 +261,9 @@ pub struct Detector<M: Backend = DefaultBackend> {
     #[cfg(feature = "plasticity")]
     flat_top_ratio: f32,
     spike_fraction: f32,
+    /// The contact is the undamped Hertz law (no calibration): its pulses are read with the
+    /// Hertz shape through five samples, and a clipped one from its flanks.
+    hertz: bool,
     hold: u16,
     max_samples: u32,
     alpha: f32,
@@ -299,6 +328,7 @@ impl<M: Backend> Detector<M> {
             #[cfg(feature = "plasticity")]
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
+            hertz: s.contact == ContactCalibration::HERTZ && plain_area(s),
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -761,11 +791,20 @@ impl<M: Backend> Detector<M> {
         p.sum += v;
         p.sum_sq += v * v;
         p.smooth(v, self.smooth);
+        let older = p.prev;
         // Second difference at the previous sample.
         p.min_curvature = p.min_curvature.min(p.prev + v - 2.0 * p.last);
         p.prev = p.last;
-        if sample >= self.adc_max || sample <= self.adc_min {
+        if sample >= self.adc_max {
             p.saturated = true;
+            p.clipped = p.clipped.saturating_add(1);
+            p.after_clip_count = 0;
+        } else if sample <= self.adc_min {
+            p.saturated = true;
+            p.low_clip = true;
+        } else if let Some(slot) = p.after_clip.get_mut(p.after_clip_count as usize) {
+            *slot = v;
+            p.after_clip_count += 1;
         }
         // Runs at the largest raw sample (a clipped top is flat in what the ADC gave).
         if sample > p.top {
@@ -795,13 +834,13 @@ impl<M: Backend> Detector<M> {
             }
             p.max = v;
             p.max_at = index;
-            p.before_max = p.last;
-            p.after_known = false;
+            p.before_max = [older, p.last];
+            p.after_count = 0;
             p.valley = v;
         } else {
-            if !p.after_known {
-                p.after_max = v;
-                p.after_known = true;
+            if let Some(slot) = p.after_max.get_mut(p.after_count as usize) {
+                *slot = v;
+                p.after_count += 1;
             }
             if v < p.valley {
                 p.valley = v;
@@ -875,12 +914,14 @@ impl<M: Backend> Detector<M> {
             outcome: Err(r),
         };
         if p.saturated {
-            return reject(RejectReason::Saturated);
+            return self.measure_clipped();
         }
-        let neighbour = if p.after_known {
-            p.before_max.max(p.after_max)
+        let [before2, before] = p.before_max;
+        let [after, after2] = p.after_max;
+        let neighbour = if p.after_count > 0 {
+            before.max(after)
         } else {
-            p.before_max
+            before
         };
         if p.above_trigger <= 1 && neighbour < 0.2 * p.max {
             return reject(RejectReason::Spike);
@@ -895,11 +936,22 @@ impl<M: Backend> Detector<M> {
             return reject(RejectReason::Drift);
         }
         let fit = if self.smooth > 1 {
-            smooth_fit(p.top_smooth, self.smooth, p.sum)
+            smooth_fit(p.top_smooth, self.smooth, p.sum).map(|(peak, duration)| PeakFit {
+                peak,
+                duration,
+                gain2: 1.0 / self.smooth as f32,
+                weight_sum: 1.0,
+            })
         } else {
-            shape_fit::<M>(p.max, p.before_max, p.after_max, p.sum)
+            peak_fit::<M>([before2, before, p.max, after, after2], p.sum, self.hertz)
         };
-        let Some((peak, duration)) = fit else {
+        let Some(PeakFit {
+            peak,
+            duration,
+            gain2,
+            weight_sum,
+        }) = fit
+        else {
             return reject(RejectReason::Implausible);
         };
         // The fit reads the area with the Hertz shape; the contact's own pulse may be flatter.
@@ -928,9 +980,13 @@ impl<M: Backend> Detector<M> {
         // samples per pulse).
         let sampling = 1.0 / (duration * duration * M::sqrt(duration));
         let (fit_force, fit_duration) = (FIT_FORCE * sampling, FIT_DURATION * sampling);
-        // The peak is the mean of `smooth` samples: its noise is that much smaller.
-        let noise_force = self.noise / (peak * M::sqrt(self.smooth.max(1) as f32));
+        // The fit's peak carries `gain2` times one sample's noise variance (the mean of
+        // `smooth` samples, or the five samples' least squares), and shares `weight_sum`
+        // samples' worth of it with the pulse's sum: `cov(ln sum, ln F_max) = noise^2
+        // weight_sum / (sum F_max)`.
+        let noise_force = self.noise * M::sqrt(gain2) / peak;
         let sigma_area = self.noise * M::sqrt(n) / p.sum;
+        let shared = self.noise * self.noise * weight_sum / (p.sum * peak);
         // Ringing seen before the pulse goes on through it, coherently: it moves the peak by
         // its amplitude (`sqrt 2` RMS) and the area by up to that over all `n` samples.
         let (ring_force, ring_area) = (
@@ -940,9 +996,9 @@ impl<M: Backend> Detector<M> {
         let ring2 = ring_force * ring_force + ring_area * ring_area;
         let sigma_ln_force =
             M::sqrt(noise_force * noise_force + fit_force * fit_force + ring_force * ring_force);
+        // `ln t_c = ln sum - ln F_max`: the variance of the difference of the two.
         let sigma_ln_duration = M::sqrt(
-            sigma_area * sigma_area
-                + noise_force * noise_force
+            (sigma_area * sigma_area + noise_force * noise_force - 2.0 * shared).max(0.0)
                 + fit_duration * fit_duration
                 + ring2,
         );
@@ -971,9 +1027,66 @@ impl<M: Backend> Detector<M> {
                 duration_s: duration * self.dt_s,
                 sigma_ln_force,
                 sigma_ln_duration,
+                cov_ln: shared - sigma_ln_force * sigma_ln_force,
             }),
         }
     }
+
+    /// A pulse with samples at the ADC's full scale, measured from its unclipped flanks
+    /// ([`flank_fit`]) when the clipped samples are one run at the top of an undamped
+    /// pulse on a rigid chain, with two samples either side of the run; otherwise `Saturated`.
+    /// Its sigmas are the fit's, from the noise and the four samples; the shape and skewness
+    /// checks, which a clipped top fails, are not made.
+    #[cold]
+    #[inline(never)]
+    fn measure_clipped(&self) -> Detection {
+        let p = &self.pulse;
+        let at_sample = p.max_at;
+        let reject = Detection::Pulse {
+            at_sample,
+            outcome: Err(RejectReason::Saturated),
+        };
+        let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
+        let plain = self.ring_weight <= 0.0 && self.hertz;
+        if !(whole && plain && p.after_clip_count >= 2 && p.clipped == p.flat) {
+            return reject;
+        }
+        let Some(fit) = flank_fit(
+            p.before_max,
+            p.clipped as f32,
+            p.after_clip,
+            p.max,
+            p.sum,
+            self.noise,
+        ) else {
+            return reject;
+        };
+        // The template's own error (the series, 1e-4 of `g` at the reach) beside the noise.
+        let (noise2, floor2) = (self.noise * self.noise, FLANK_FLOOR * FLANK_FLOOR);
+        let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
+        Detection::Pulse {
+            at_sample,
+            outcome: Ok(Measurement {
+                peak_force_n: fit.peak * self.force_per_count_n,
+                duration_s: fit.duration * self.dt_s,
+                sigma_ln_force: M::sqrt(f2 + floor2),
+                sigma_ln_duration: M::sqrt(t2 + floor2),
+                cov_ln: cov,
+            }),
+        }
+    }
+}
+
+/// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).
+#[cfg(feature = "plasticity")]
+fn plain_area(s: &crate::scene::Settings) -> bool {
+    s.area_ratio == 1.0 && s.flat_top_ratio == 1.0
+}
+
+/// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).
+#[cfg(not(feature = "plasticity"))]
+fn plain_area(_: &crate::scene::Settings) -> bool {
+    true
 }
 
 /// One quiet sample `v` into the scaled mean square `sum` (`ms (1 - w) / w`, see

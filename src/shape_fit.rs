@@ -1,6 +1,6 @@
 //! The Hertz pulse's shape as the detector reads it: its area and energy over `F_max t_c`,
-//! its curvature at the peak, and the fit of a sampled pulse's peak and duration from its
-//! largest sample, that sample's neighbours and the sum of its samples.
+//! its shape about the peak, and the fit of a sampled pulse's peak and duration from its
+//! largest sample, the two samples either side of it and the sum of its samples.
 
 use crate::math::{self, Backend};
 
@@ -18,42 +18,305 @@ pub const C_ENERGY: f32 = 0.411_341_7;
 /// `pi` of a sine.
 pub const PEAK_OMEGA: f32 = 3.290_681;
 
-/// Peak (counts) and duration (samples) of a sampled Hertz pulse from its largest sample
-/// `y0`, the samples before and after it and the sum of all its samples; `None` when they are
-/// not a positive pulse.
-pub fn shape_fit<M: Backend>(y0: f32, before: f32, after: f32, sum: f32) -> Option<(f32, f32)> {
+/// Largest phase step per sample, `PEAK_OMEGA / n` rad for `n` samples per pulse, at which the
+/// peak is fitted through five samples (from `n = 7.8`): the window's ends then lie within
+/// `|x| <= 2.5 * 0.42 = 1.05` of the top, inside the pulse (`|x| < PEAK_OMEGA / 2 = 1.645`)
+/// where [`peak_shape`]'s series holds to 2e-7. Above it three samples are used.
+pub const FIVE_POINT_STEP: f32 = 0.42;
+
+/// Taylor coefficients of [`peak_shape`]'s `g` in `x^2`.
+const PEAK_SERIES: [f32; 10] = [
+    1.0,
+    -0.75,
+    0.1875,
+    -0.025,
+    3.013_393e-3,
+    -2.176_339_3e-4,
+    2.967_735_4e-5,
+    7.066_037e-7,
+    6.807_855e-7,
+    1.501e-7,
+];
+
+/// The Hertz pulse about its top, `g(x) = F / F_max` with `x = PEAK_OMEGA (t - t_peak) / t_c`:
+/// `g = h^(3/2)` where `h = z / z_max` (`z = F^(2/3)`, the indentation) solves `m delta'' = -k
+/// delta^(3/2)`, in these units `h'' = -h^(3/2)`, `h(0) = 1`, `h'(0) = 0`. Its Taylor series in
+/// `x^2`, from that equation's recursion, is `g = 1 - (3/4) x^2 + (3/16) x^4 - x^6/40 +
+/// 3.0134e-3 x^8 - 2.1763e-4 x^10 + ...`, taken to `x^18` (within 2e-7 of the series to `x^40`
+/// for `|x| <= 1.05`; the pulse ends at `x = PEAK_OMEGA / 2 = 1.645`, the series' radius).
+/// Returns `(g, dg/dx)`.
+#[inline]
+pub fn peak_shape(x: f32) -> (f32, f32) {
+    let s = x * x;
+    let (mut g, mut slope) = (0.0f32, 0.0f32);
+    for (j, &a) in PEAK_SERIES.iter().enumerate().rev() {
+        g = g * s + a;
+        // dg/dx = x sum_j 2 j a_j s^(j-1): the terms from j = 1 on, one power lower.
+        if j > 0 {
+            slope = slope * s + 2.0 * j as f32 * a;
+        }
+    }
+    (g, slope * x)
+}
+
+/// A pulse's peak and duration as the fit reads them, with what the noise does to the peak.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PeakFit {
+    /// Peak `F_max` (counts).
+    pub peak: f32,
+    /// Duration `t_c = sum / (C_AREA F_max)` (samples).
+    pub duration: f32,
+    /// Variance of the peak over that of one sample's white noise: `var F_max = gain2
+    /// sigma^2` (the least-squares `[(J^T J)^-1]_AA`; 1 for three samples).
+    pub gain2: f32,
+    /// Sum of the peak's weights over the samples, `sum_k dF_max / dy_k`: the peak shares
+    /// `sigma^2 weight_sum` of covariance with the pulse's sum (1 for three samples).
+    pub weight_sum: f32,
+}
+
+/// The five samples of `y` about index `i`, `[y_(i-2), .., y_(i+2)]`, 0 where `y` has none:
+/// what [`shape_fit`] takes about a pulse's largest sample.
+pub fn five_about(y: &[f32], i: usize) -> [f32; 5] {
+    core::array::from_fn(|k| {
+        (i + k)
+            .checked_sub(2)
+            .and_then(|j| y.get(j))
+            .copied()
+            .unwrap_or(0.0)
+    })
+}
+
+/// Peak (counts) and duration (samples) of a sampled Hertz pulse from its five samples about
+/// the largest, `top = [y_-2, y_-1, y_0, y_1, y_2]` (`y_0` the largest), and the sum of all its
+/// samples; `None` when they are not a positive pulse. See [`peak_fit`].
+pub fn shape_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<(f32, f32)> {
+    peak_fit::<M>(top, sum, five).map(|f| (f.peak, f.duration))
+}
+
+/// The fit behind [`shape_fit`], with its noise gains. `F_max` and `t_c = sum / (C_AREA
+/// F_max)` are iterated three times; with the phase step `d = PEAK_OMEGA / t_c` per sample:
+///
+/// - `five` (the contact is the undamped Hertz law, whose shape the fit takes; a damped or
+///   yielding contact's pulse is not that shape, and its calibration reads it as below) and
+///   `d <= FIVE_POINT_STEP` (7.8 samples per pulse or more): Gauss-Newton steps of the
+///   least-squares fit of `F_max g(d (k - k_peak))` ([`peak_shape`]) to the five samples, in
+///   `F_max`, the offset `k_peak` and the phase step `d` (two Gauss-Newton steps from the
+///   three samples' peak). The largest
+///   of single noisy samples, which three samples lean on, is biased high by the noise;
+///   the five samples' fit is not, to first order, and its noise is smaller.
+/// - Otherwise `z = F^(2/3) = F_max^(2/3) sin(pi t / t_c)` is taken as a sinusoid of known
+///   frequency, so `z_0` and its larger neighbour `z_1` give the offset `theta` of the true
+///   peak, `tan theta = (z_1/z_0 - cos d) / sin d`, and `F_max = (z_0 / cos theta)^(3/2)` with
+///   `|theta| <= d/2`.
+pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<PeakFit> {
+    let [_, before, y0, after, _] = top;
     if !(y0 > 0.0 && sum > 0.0 && y0.is_finite() && sum.is_finite()) {
         return None;
     }
     let z = |y: f32| if y > 0.0 { M::pow_2_3(y) } else { 0.0 };
     let (z0, za, zb) = (z(y0), z(before.min(y0)), z(after.min(y0)));
-    let mut peak = y0;
-    let mut duration = sum / (C_AREA * peak);
+    let mut fit = PeakFit {
+        peak: y0,
+        duration: sum / (C_AREA * y0),
+        gain2: 1.0,
+        weight_sum: 1.0,
+    };
     for _ in 0..3 {
-        // Phase step per sample; a pulse shorter than one sample is clamped to one.
-        let d = (PEAK_OMEGA / duration).min(core::f32::consts::PI);
-        let (sh, ch) = math::sin_cos(0.5 * d.min(core::f32::consts::FRAC_PI_2));
-        let b_max = z0 / ch;
-        let b = if d >= 0.3 {
-            let (s, c) = math::sin_cos(d);
-            let r = za.max(zb) / z0;
-            let t = ((r - c) / s).max(0.0).min(sh / ch);
-            z0 * M::sqrt(1.0 + t * t)
-        } else {
-            let curv = za - 2.0 * z0 + zb;
-            if curv < 0.0 {
-                let off = (za - zb) / (2.0 * curv);
-                z0 - 0.25 * (za - zb) * off
-            } else {
-                z0
-            }
-        };
-        peak = M::pow_3_2(b.max(z0).min(b_max));
-        duration = sum / (C_AREA * peak);
+        fit.peak = three_point::<M>(z0, za.max(zb), step(fit.duration));
+        fit.duration = sum / (C_AREA * fit.peak);
     }
-    if peak.is_finite() && duration.is_finite() && duration > 0.0 {
-        Some((peak, duration))
-    } else {
-        None
+    let d = step(fit.duration);
+    if five && d <= FIVE_POINT_STEP {
+        let mut p = [fit.peak, 0.0, d];
+        for _ in 0..2 {
+            let Some(gains) = five_point(&top, &mut p, d) else {
+                break;
+            };
+            (fit.peak, fit.gain2, fit.weight_sum) = (p[0], gains.0, gains.1);
+        }
+        fit.duration = sum / (C_AREA * fit.peak);
     }
+    (fit.peak.is_finite() && fit.duration.is_finite() && fit.peak > 0.0 && fit.duration > 0.0)
+        .then_some(fit)
+}
+
+/// Phase step per sample of a pulse of `duration` samples, `PEAK_OMEGA / duration`; a pulse
+/// shorter than one sample is clamped to one.
+fn step(duration: f32) -> f32 {
+    (PEAK_OMEGA / duration).min(core::f32::consts::PI)
+}
+
+/// The peak through the largest `z` sample `z0` and its larger neighbour `z1` with the phase
+/// step `d` (see [`peak_fit`]).
+fn three_point<M: Backend>(z0: f32, z1: f32, d: f32) -> f32 {
+    let (sh, ch) = math::sin_cos(0.5 * d.min(core::f32::consts::FRAC_PI_2));
+    let (s, c) = math::sin_cos(d);
+    let t = ((z1 / z0 - c) / s).max(0.0).min(sh / ch);
+    let b = z0 * M::sqrt(1.0 + t * t);
+    M::pow_3_2(b.max(z0).min(z0 / ch))
+}
+
+/// One Gauss-Newton step of the five-sample fit of `F_max g(d (k - k_peak))` in
+/// `p = [F_max, k_peak, d]` (updated in place; `k_peak` kept within one sample of the largest,
+/// `d` within a factor 1.25 of `d_area`, the area's): `(gain2, weight_sum)` of the step's
+/// normal equations, `None` when they are singular or the peak leaves the positive.
+#[inline(never)]
+fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32)> {
+    let [peak, offset, d] = *p;
+    let ts = [-2.0, -1.0, 0.0, 1.0, 2.0].map(|k: f32| k - offset);
+    let (n, b, c) = normal_equations(&ts, top, peak, d);
+    let inv = inverse3(&n)?;
+    let dot = |row: &[f32; 3], v: &[f32; 3]| row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
+    let new_peak = peak + dot(&inv[0], &b);
+    if new_peak.is_nan() || new_peak <= 0.0 {
+        return None;
+    }
+    *p = [
+        new_peak,
+        (offset + dot(&inv[1], &b)).max(-1.0).min(1.0),
+        (d + dot(&inv[2], &b)).max(0.8 * d_area).min(1.25 * d_area),
+    ];
+    Some((inv[0][0], dot(&inv[0], &c)))
+}
+
+/// The Gauss-Newton normal equations of `F_max g(d t)` ([`peak_shape`]) at the sample times
+/// `ts` (samples from the peak) with values `ys`: `[n11, n12, n13, n22, n23, n33]`, the right
+/// side `b` and the column sums `c` of the columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'`
+/// and `dm/dd = F_max t g'`.
+#[inline(never)]
+fn normal_equations(ts: &[f32], ys: &[f32], peak: f32, d: f32) -> ([f32; 6], [f32; 3], [f32; 3]) {
+    let (mut n, mut b, mut c) = ([0.0f32; 6], [0.0f32; 3], [0.0f32; 3]);
+    for (&t, &y) in ts.iter().zip(ys) {
+        let (g, slope) = peak_shape(d * t);
+        let (j1, j2, j3) = (g, -peak * d * slope, peak * t * slope);
+        let r = y - peak * g;
+        n = [
+            n[0] + j1 * j1,
+            n[1] + j1 * j2,
+            n[2] + j1 * j3,
+            n[3] + j2 * j2,
+            n[4] + j2 * j3,
+            n[5] + j3 * j3,
+        ];
+        b = [b[0] + j1 * r, b[1] + j2 * r, b[2] + j3 * r];
+        c = [c[0] + j1, c[1] + j2, c[2] + j3];
+    }
+    (n, b, c)
+}
+
+/// The inverse of the symmetric 3 x 3 matrix `[[a, b, c], [b, e, f], [c, f, i]]`, given as
+/// `[a, b, c, e, f, i]`, by its cofactors; `None` when it is singular to within f32
+/// (determinant below `1e-6` of its diagonal's product).
+fn inverse3(&[a, b, c, e, f, i]: &[f32; 6]) -> Option<[[f32; 3]; 3]> {
+    let cof = [
+        [e * i - f * f, c * f - b * i, b * f - c * e],
+        [c * f - b * i, a * i - c * c, b * c - a * f],
+        [b * f - c * e, b * c - a * f, a * e - b * b],
+    ];
+    let det = a * cof[0][0] + b * cof[0][1] + c * cof[0][2];
+    if det.is_nan() || det.abs() <= 1e-6 * (a * e * i).abs() {
+        return None;
+    }
+    Some(cof.map(|row| row.map(|v| v / det)))
+}
+
+/// Largest `|x|` of [`peak_shape`] at which [`flank_fit`] takes a flank sample: the series is
+/// within 2e-5 of `g` there (`g(1.3) = 0.170`).
+pub const FLANK_REACH: f32 = 1.3;
+
+/// What [`flank_fit`] reads from a clipped pulse: peak (counts), duration (samples), and the
+/// covariance of `(ln F_max, ln t_c)` over one sample's noise variance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlankFit {
+    /// Peak `F_max` (counts).
+    pub peak: f32,
+    /// Duration `t_c = PEAK_OMEGA / d` (samples).
+    pub duration: f32,
+    /// `[var ln F_max, var ln t_c, cov]` over the noise variance of one sample (counts^-2).
+    pub gains: [f32; 3],
+}
+
+/// Peak and duration of a pulse whose top is clipped, from its unclipped flanks: the two
+/// samples before the first clipped one (at `k = -2, -1`), the two after the last (`k = run,
+/// run + 1`, `run` clipped samples), the clipping `level` and the sum of all samples. The
+/// least-squares fit of `F_max g(d (k - k_peak))` ([`peak_shape`]) to the four, in `F_max`,
+/// `k_peak` and the phase step `d` (six Gauss-Newton steps from `k_peak` at the clipped run's
+/// middle, `d` from the area over the level, `F_max` through the nearer flank samples), gives
+/// `t_c = PEAK_OMEGA / d`. `None` when the fit fails or does not describe a clipped pulse: a
+/// flank sample beyond [`FLANK_REACH`], `d` at the end of its range, the peak outside the
+/// clipped run, the fitted pulse below the level (less four `noise` RMS) at the run's ends,
+/// or the four samples' residual above `4 noise` RMS (with `1e-4 F_max` for the template).
+#[inline(never)]
+pub fn flank_fit(
+    before: [f32; 2],
+    run: f32,
+    after: [f32; 2],
+    level: f32,
+    sum: f32,
+    noise: f32,
+) -> Option<FlankFit> {
+    if !(level > 0.0 && sum > 0.0 && run >= 1.0 && level.is_finite() && sum.is_finite()) {
+        return None;
+    }
+    let ks = [-2.0, -1.0, run, run + 1.0];
+    let ys = [before[0], before[1], after[0], after[1]];
+    let d0 = step(sum / (C_AREA * level));
+    let half = 0.5 * (run + 1.0);
+    let near = 0.5 * (before[1] + after[0]);
+    let mut p = [
+        near / peak_shape(d0 * half).0.max(0.1),
+        0.5 * (run - 1.0),
+        d0,
+    ];
+    let mut inv = [[0.0f32; 3]; 3];
+    for _ in 0..6 {
+        inv = flank_step(&ks, &ys, &mut p, (0.5 * d0, 2.0 * d0), 0.5 * (run - 1.0))?;
+    }
+    let [peak, at, d] = p;
+    let reach = ks.iter().fold(0.0f32, |m, &k| m.max((d * (k - at)).abs()));
+    let model = |k: f32| peak * peak_shape(d * (k - at)).0;
+    let rss = ks
+        .iter()
+        .zip(&ys)
+        .fold(0.0f32, |a, (&k, &y)| a + (y - model(k)) * (y - model(k)));
+    let tolerance = 16.0 * noise * noise + 4e-8 * peak * peak;
+    let edge = model(0.0).min(model(run - 1.0));
+    let inside = at >= -0.5 && at <= run - 0.5 && d > 0.501 * d0 && d < 1.99 * d0;
+    if !(inside && reach <= FLANK_REACH && edge >= level - 4.0 * noise && rss <= 4.0 * tolerance) {
+        return None;
+    }
+    // ln t_c = ln PEAK_OMEGA - ln d.
+    let gains = [
+        inv[0][0] / (peak * peak),
+        inv[2][2] / (d * d),
+        -inv[0][2] / (peak * d),
+    ];
+    Some(FlankFit {
+        peak,
+        duration: PEAK_OMEGA / d,
+        gains,
+    })
+}
+
+/// One Gauss-Newton step of [`flank_fit`] over the samples `ys` at `ks`, `p = [F_max, k_peak,
+/// d]` updated in place (`d` kept within `d_range`, `k_peak` within one sample of `middle`):
+/// the inverse of the normal equations, `None` when they are singular.
+#[inline(never)]
+fn flank_step(
+    ks: &[f32; 4],
+    ys: &[f32; 4],
+    p: &mut [f32; 3],
+    (d_lo, d_hi): (f32, f32),
+    middle: f32,
+) -> Option<[[f32; 3]; 3]> {
+    let [peak, at, d] = *p;
+    let (n, b, _) = normal_equations(&ks.map(|k| k - at), ys, peak, d);
+    let inv = inverse3(&n)?;
+    let dot = |row: &[f32; 3]| row[0] * b[0] + row[1] * b[1] + row[2] * b[2];
+    *p = [
+        (peak + dot(&inv[0])).max(0.5 * peak),
+        (at + dot(&inv[1])).max(middle - 1.0).min(middle + 1.0),
+        (d + dot(&inv[2])).max(d_lo).min(d_hi),
+    ];
+    Some(inv)
 }

@@ -18,7 +18,7 @@
 //! | clean impact | one, not `Rejected` | `classified` / `ambiguous` / `out_of_envelope` |
 //! | EMI spike (one sample, 200 to 20 000 counts) | one `Rejected(Spike)` | `rejected[Spike]` |
 //! | pile-up (2 impacts, 0.85-1.0 t_c apart) | one `Rejected(PileUp)` | `rejected[PileUp]` |
-//! | saturated impact (1.05-4 x full scale) | one `Rejected(Saturated)` | `rejected[Saturated]` |
+//! | saturated impact (1.05-4 x full scale) | one `Rejected(Saturated)`, or measured from its flanks (any verdict but another rejection) | `rejected[Saturated]`, or as a clean impact |
 //! | samples dropped mid-pulse + `gap` | one `Rejected(Gap)` | `rejected[Gap]`, `gaps` |
 //! | samples dropped from before a pulse into it + `gap` | one `Rejected(Gap)` | `rejected[Gap]`, `gaps` |
 //! | samples dropped between pulses + `gap` | none | `gaps` |
@@ -54,7 +54,9 @@ impl Kind {
             Kind::Clean(_) => !matches!(v, Verdict::Rejected(_)),
             Kind::Spike => *v == Verdict::Rejected(RejectReason::Spike),
             Kind::PileUp => *v == Verdict::Rejected(RejectReason::PileUp),
-            Kind::Saturated => *v == Verdict::Rejected(RejectReason::Saturated),
+            // Measured from its flanks when enough of them is left: its force is scaled past
+            // the physical one, so any verdict but another rejection is right.
+            Kind::Saturated => !matches!(v, Verdict::Rejected(r) if *r != RejectReason::Saturated),
             Kind::GapMid | Kind::GapIntoPulse => *v == Verdict::Rejected(RejectReason::Gap),
             Kind::Truncated => *v == Verdict::Rejected(RejectReason::Truncated),
             Kind::GapBetween | Kind::Stuck => false,
@@ -78,6 +80,9 @@ struct Tally {
     clean_unsure: u64,
     spurious: Vec<Report>,
     mismatched: Vec<String>,
+    /// Saturated impacts measured from their flanks, and how many of them got a class.
+    saturated_measured: u64,
+    saturated_classified: u64,
     lost: u64,
     fed: u64,
 }
@@ -260,6 +265,14 @@ fn close(e: Open, tally: &mut Tally) {
                 .collect::<Vec<_>>()
         ));
     }
+    if let (Kind::Saturated, [r]) = (e.kind, e.reports.as_slice()) {
+        if !matches!(r.verdict, Verdict::Rejected(_)) {
+            tally.saturated_measured += 1;
+        }
+        if matches!(r.verdict, Verdict::Class { .. }) {
+            tally.saturated_classified += 1;
+        }
+    }
     if let (Kind::Clean(truth), [r]) = (e.kind, e.reports.as_slice()) {
         match r.verdict {
             Verdict::Class { class, .. } if class == truth => tally.clean_class_right += 1,
@@ -395,6 +408,12 @@ fn every_injected_event_is_accounted_for() {
         "clean impacts: {} right class, {} wrong class, {} ambiguous or out of envelope; spurious reports {:?}",
         tally.clean_class_right, tally.clean_class_wrong, tally.clean_unsure, tally.spurious
     );
+    println!(
+        "saturated impacts measured from their flanks: {} of {} ({} given a class)",
+        tally.saturated_measured,
+        tally.injected.get("Saturated").copied().unwrap_or(0),
+        tally.saturated_classified
+    );
     println!("counters: {c:?}");
 
     // Every event came out as expected.
@@ -440,18 +459,21 @@ fn every_injected_event_is_accounted_for() {
     let classified: u64 = c.classified.iter().map(|&v| v as u64).sum();
     assert_eq!(
         classified + c.ambiguous as u64 + c.out_of_envelope as u64,
-        n("Clean") + spurious_unrejected(&tally)
+        n("Clean") + tally.saturated_measured + spurious_unrejected(&tally)
     );
     assert_eq!(
         classified,
-        tally.clean_class_right + tally.clean_class_wrong
+        tally.clean_class_right + tally.clean_class_wrong + tally.saturated_classified
     );
     assert_eq!(
         rejected(RejectReason::Spike),
         n("Spike") + spurious_rejected(&tally, RejectReason::Spike)
     );
     assert_eq!(rejected(RejectReason::PileUp), n("PileUp"));
-    assert_eq!(rejected(RejectReason::Saturated), n("Saturated"));
+    assert_eq!(
+        rejected(RejectReason::Saturated) + tally.saturated_measured,
+        n("Saturated")
+    );
     assert_eq!(rejected(RejectReason::Gap), n("GapMid") + n("GapIntoPulse"));
     assert_eq!(rejected(RejectReason::Truncated), n("Truncated"));
     assert_eq!(rejected(RejectReason::TooLong), 0);

@@ -19,6 +19,7 @@ fn exact(mat: Material, r: f64, u: f64) -> Measurement {
         duration_s: (2.943_275_184_324_7 * d / u) as f32,
         sigma_ln_force: 0.0,
         sigma_ln_duration: 0.0,
+        cov_ln: 0.0,
     }
 }
 
@@ -42,6 +43,7 @@ fn inversion_round_trip_over_the_scene() {
                     duration_s: imp.duration_s,
                     sigma_ln_force: 0.0,
                     sigma_ln_duration: 0.0,
+                    cov_ln: 0.0,
                 };
                 let inv = scene.invert(ci, &m).unwrap();
                 assert!(
@@ -147,6 +149,7 @@ fn bad_measurements_are_rejected_not_panicking() {
             duration_s: t,
             sigma_ln_force: f32::NAN,
             sigma_ln_duration: -1.0,
+            cov_ln: f32::NAN,
         };
         assert_eq!(
             scene.classify(&m),

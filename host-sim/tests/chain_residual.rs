@@ -11,6 +11,7 @@ use coalshock::chain_residual::{SMOOTH_FROM_SAMPLES, residual};
 use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
 use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
+use coalshock::shape_fit::five_about;
 use host_sim::convert::sensor_to_kernel;
 use host_sim::scene::SensorSpec;
 
@@ -29,15 +30,13 @@ fn fitted(chain: &SensorSpec, n: f64, phase: f64) -> (f64, f64) {
     // The equaliser's output lags by its delay: the pulse's samples are those after it.
     let delay = design.delay_samples() as usize;
     let pulse = &out[64 + delay - 2..64 + delay + n.ceil() as usize + 3];
-    let (i, &top) = pulse
+    let (i, _) = pulse
         .iter()
         .enumerate()
         .max_by(|a, b| a.1.total_cmp(b.1))
         .unwrap();
-    let before = pulse.get(i.wrapping_sub(1)).copied().unwrap_or(0.0);
-    let after = pulse.get(i + 1).copied().unwrap_or(0.0);
     let sum: f32 = pulse.iter().sum();
-    let (f, t) = shape_fit::<Libm>(top, before, after, sum).unwrap();
+    let (f, t) = shape_fit::<Libm>(five_about(pulse, i), sum, true).unwrap();
     ((f as f64).ln(), (t as f64).ln())
 }
 

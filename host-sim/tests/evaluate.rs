@@ -204,6 +204,8 @@ fn rejected_impacts_stay_in_their_rows() {
     o.stream = StreamOptions {
         faults: host_sim::stream::FaultOptions {
             saturate_share: 0.5,
+            // Past what the flanks can measure: rejected `Saturated`.
+            saturate_overdrive: 4.0,
             ..Default::default()
         },
         ..StreamOptions::default()

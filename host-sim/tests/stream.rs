@@ -176,6 +176,9 @@ fn injected_faults_give_the_kernel_outcomes_they_are_meant_to() {
     let opts = StreamOptions {
         faults: FaultOptions {
             saturate_share: 0.1,
+            // Four times full scale: too little of the flanks is left to measure the pulse
+            // from (just past full scale the kernel measures it, `tests/saturation.rs`).
+            saturate_overdrive: 4.0,
             drop_share: 0.1,
             spike_share: 0.25,
             stuck_share: 0.15,

@@ -22,6 +22,7 @@
 use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
 use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
+use coalshock::shape_fit::five_about;
 
 use crate::physics::hertz64::HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR;
 use crate::physics::impact::{ImpactSpec, simulate};
@@ -113,11 +114,11 @@ fn fit_sampled(series: &[(f64, f64)], dt: f64, phase: usize) -> Option<(f64, f64
         v.push(force_at(series, t));
         t += dt;
     }
-    let (i, &top) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
-    let before = if i > 0 { v[i - 1] } else { 0.0 };
-    let after = v.get(i + 1).copied().unwrap_or(0.0);
+    let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
-    let (peak, samples) = shape_fit::<Libm>(top as f32, before as f32, after as f32, sum as f32)?;
+    let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+    // A calibrated (damped or yielding) contact's pulses are read with three samples.
+    let (peak, samples) = shape_fit::<Libm>(five_about(&v32, i), sum as f32, false)?;
     Some((peak as f64, samples as f64))
 }
 
