@@ -278,7 +278,8 @@ impl KernelParts {
 /// `shape_tolerance >= 1.5 x` the spread of `ln q` (between impacts, plus that of sampling at
 /// the scene's rate), `model_sigma >= ` the larger spread of
 /// `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled bend,
-/// `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file sets them). A scene
+/// `skew_tolerance >= 1.5 x` the spread of the skewness, or what of it the detector's trigger
+/// cut leaves outside its allowance if that is more (unless the file sets them). A scene
 /// whose classes carry ratio tables ([`ratio_maps_to_kernel`]) leaves the force and duration
 /// ratios to them (1 here), and its `model_sigma` is at least what the tables leave against
 /// direct integration ([`crate::bridge::ratio_table::class_residual`]).
@@ -323,7 +324,8 @@ pub fn calibrated_settings(scene: &SceneFile) -> Result<Settings, ConvertError> 
             s.model_sigma = s.model_sigma.max(spread as f32);
         }
         if o.skew_tolerance.is_none() {
-            s.skew_tolerance = s.skew_tolerance.max((1.5 * c.skewness_spread) as f32);
+            let spread = c.skewness_spread.max(c.skewness_cut_excess);
+            s.skew_tolerance = s.skew_tolerance.max((1.5 * spread) as f32);
         }
         if o.spike_fraction.is_none() {
             s.spike_fraction = s.spike_fraction.max((1.25 * c.sharpest_bend) as f32);
