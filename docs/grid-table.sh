@@ -21,6 +21,7 @@ seed=${2:-1}
 jobs=${3:-2}
 laws=${4:-hunt_crossley,lankarani_nikravesh,flores,gonthier,tsuji}
 cargo build --release -q -p host-sim
+cargo build --release -q -p host-sim --example sampled_phase
 bin=$PWD/target/release/host-sim
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -117,4 +118,21 @@ print("| law | e | rate (Hz) | noise (counts) | priors coal : gangue | forced ch
 print("|---|---|---|---|---|---|---|---|---|---|---|---|")
 print("\n".join(rows))
 EOF
+# Where the misses come from: the kernel's fit on damped pulses of a few samples.
+{
+    echo
+    echo "## Where the misses come from"
+    echo
+    echo "\`cargo run --release -p host-sim --example sampled_phase -- LAW E\` (its module docs say how)."
+    echo "Each block: the damped pulse's duration from the area (what the detector measures) over"
+    echo "the Hertz contact time, which the kernel's rate check uses; then the root mean square of"
+    echo "the kernel's fit error of \`ln F_max\` and \`ln t_c\` that a correction by samples per pulse"
+    echo "alone leaves (the phase of the samples), and what a table over samples per pulse and the"
+    echo "neighbours' asymmetry \`(after - before) / largest\` would leave."
+    for law in "flores 0.5" "flores 0.3" "gonthier 0.3" "hunt_crossley 0.3" "tsuji 0.4"; do
+        echo
+        # shellcheck disable=SC2086
+        target/release/examples/sampled_phase $law
+    done
+} >> docs/grid.md
 echo "wrote docs/grid.md" >&2
