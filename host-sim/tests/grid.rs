@@ -112,3 +112,26 @@ fn tsuji_at_1m_noisy_with_skewed_priors() {
 fn hunt_crossley_at_25k_with_skewed_priors() {
     check("hunt_crossley", 0.6, 25e3, 4.0, 9.0);
 }
+
+/// Flores at e 0.3 measures a pulse 0.58 of the Hertz contact time from its area: at the
+/// lowest rate the kernel accepts (2.5 samples in the shortest Hertz pulse) its shortest
+/// measured pulse has about 1.45, and the scene build warns; at the rate the warning names it
+/// has 2.5, and at 100 kS/s, or for the undamped paper scene, nothing is said.
+#[test]
+fn a_damped_scene_warns_when_its_measured_pulses_are_too_short() {
+    use host_sim::calibrate::{sampling_warning, shortest_measured_samples};
+    let low = grid_scene("flores", 0.3, 22_200.0, 4.0, 1.0);
+    let n = shortest_measured_samples(&low)
+        .unwrap()
+        .expect("a damped law");
+    assert!((1.3..1.6).contains(&n), "{n}");
+    assert!(sampling_warning(&low).unwrap().is_some());
+    let enough = grid_scene("flores", 0.3, 22_200.0 * 2.5 / n * 1.001, 4.0, 1.0);
+    assert!(sampling_warning(&enough).unwrap().is_none());
+    assert!(
+        sampling_warning(&grid_scene("flores", 0.3, 1e5, 4.0, 1.0))
+            .unwrap()
+            .is_none()
+    );
+    assert!(sampling_warning(&SceneFile::paper()).unwrap().is_none());
+}

@@ -538,3 +538,47 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         flat_top_ratio: (ln_top / n).exp(),
     }))
 }
+
+/// Samples in the shortest pulse the kernel's detector measures in `scene`: the shortest Hertz
+/// contact time of its classes (smallest radius, largest speed) times the calibration's
+/// duration ratio (the damped pulse's duration from its area over the Hertz time: 0.78 for
+/// Flores at e 0.5, 0.58 at e 0.3) times the sample rate; `None` for a contact the kernel
+/// models exactly (no calibration).
+pub fn shortest_measured_samples(scene: &SceneFile) -> Result<Option<f64>, SimError> {
+    let Some(cal) = calibrate(scene)? else {
+        return Ok(None);
+    };
+    let plate = scene.plate.material();
+    let mut shortest_s = f64::INFINITY;
+    for class in &scene.classes {
+        let spec = ImpactSpec::new(
+            class.material.material(),
+            plate,
+            class.radius_m.min,
+            class.speed_range_m_s().max,
+        );
+        shortest_s = shortest_s.min(spec.hertz()?.duration_s);
+    }
+    Ok(Some(
+        shortest_s * cal.ratios.duration * scene.sensor.sample_rate_hz,
+    ))
+}
+
+/// A warning when the shortest pulse the detector measures in `scene`
+/// ([`shortest_measured_samples`]) has fewer than the 2.5 samples the kernel's fit and its
+/// sampling correction start from (the kernel checks the Hertz contact time, not the damped
+/// pulse's); `None` otherwise.
+pub fn sampling_warning(scene: &SceneFile) -> Result<Option<String>, SimError> {
+    Ok(shortest_measured_samples(scene)?
+        .filter(|&n| n < SAMPLED_FIRST_N as f64)
+        .map(|n| {
+            format!(
+                "the damped contact shortens the pulse the detector measures: the shortest has \
+                 {n:.2} samples, below the {SAMPLED_FIRST_N} the kernel's fit and its sampling \
+                 correction start from; below about 5 samples the fit's error follows the \
+                 samples' phase and is carried as noise (docs/grid.md), so expect forced choice \
+                 below the reference limit; raise the sample rate to at least {:.0} Hz",
+                scene.sensor.sample_rate_hz * SAMPLED_FIRST_N as f64 / n
+            )
+        }))
+}
