@@ -223,7 +223,8 @@ fn resolve_scene(path: Option<&Path>) -> Result<(SceneFile, String)> {
 }
 
 /// Reports on standard error the share of the scene's impacts predicted to clip the ADC
-/// (`host_sim::saturation`), as a warning above 1 %.
+/// (`host_sim::saturation`), as a warning above 1 %, and warns when a damped contact leaves
+/// its shortest measured pulse fewer than 2.5 samples (`host_sim::calibrate`).
 fn report_saturation(scene: &SceneFile) {
     match host_sim::saturation::predict(scene) {
         Ok(p) => {
@@ -233,6 +234,11 @@ fn report_saturation(scene: &SceneFile) {
             }
         }
         Err(e) => eprintln!("warning: the ADC clipping could not be predicted: {e}"),
+    }
+    match host_sim::calibrate::sampling_warning(scene) {
+        Ok(Some(w)) => eprintln!("warning: {w}"),
+        Ok(None) => {}
+        Err(e) => eprintln!("warning: the samples per pulse could not be predicted: {e}"),
     }
 }
 

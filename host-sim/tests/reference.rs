@@ -61,7 +61,7 @@ fn elastic_reference_agrees_with_the_closed_form_bayes_integral() {
     let n = 20_000;
     for noise in &NOISES {
         let maps = constant_noise_maps(&scene, &opts, noise);
-        let r = reference_accuracy(&maps, n, &mut uniform_stream(7));
+        let r = reference_accuracy(&maps, n, 0.99, &mut uniform_stream(7));
         let b = bayes_accuracy(
             &class_models(&scene),
             Some(noise),
@@ -93,7 +93,7 @@ fn elastic_reference_agrees_with_the_closed_form_bayes_integral() {
     }
     // And on independent draws, within the Monte Carlo error.
     let maps = constant_noise_maps(&scene, &opts, &NOISES[0]);
-    let r = reference_accuracy(&maps, n, &mut uniform_stream(1));
+    let r = reference_accuracy(&maps, n, 0.99, &mut uniform_stream(1));
     let b = bayes_accuracy(
         &class_models(&scene),
         Some(&NOISES[0]),
@@ -220,4 +220,34 @@ fn impulse_durations_follow_momentum() {
     println!("worst impulse-duration error {worst:.2e}, largest gap to the first zero {apart:.3}");
     assert!(worst < 1e-3, "{worst}");
     assert!(apart > 0.05, "{apart}");
+}
+
+/// With exact posteriors, a decision whose posterior reaches `1 - r` is wrong with probability
+/// at most `r` whatever the priors: at 9 : 1 and at 1 : 1, the reference's confident draws are
+/// wrong at most 1 % of the time (plus 3 standard errors) at the threshold 0.99, and the
+/// coverage that leaves falls as the threshold rises.
+#[test]
+fn confident_draws_at_the_limit_keep_their_error_rate_under_skewed_priors() {
+    let opts = ReferenceOptions {
+        grid: 4,
+        phases: 1,
+        ..ReferenceOptions::default()
+    };
+    let n = 20_000;
+    for coal_prior in [1.0, 9.0] {
+        let mut scene = SceneFile::paper();
+        scene.classes[0].prior = coal_prior;
+        let maps = constant_noise_maps(&scene, &opts, &NOISES[0]);
+        let r = reference_accuracy(&maps, n, 0.99, &mut uniform_stream(3));
+        let looser = reference_accuracy(&maps, n, 0.9, &mut uniform_stream(3));
+        let confident = r.coverage * (2 * n) as f64;
+        let se = (0.01 * 0.99 / confident.max(1.0)).sqrt();
+        println!(
+            "priors {coal_prior}:1: coverage {:.4} at 0.99 ({:.5} wrong), {:.4} at 0.9 ({:.5} wrong)",
+            r.coverage, r.confident_error_rate, looser.coverage, looser.confident_error_rate
+        );
+        assert!(r.coverage > 0.05 && r.coverage < looser.coverage, "{r:?}");
+        assert!(r.confident_error_rate <= 0.01 + 3.0 * se, "{r:?}");
+        assert!(looser.confident_error_rate <= 0.1 + 3.0 * se, "{looser:?}");
+    }
 }

@@ -176,7 +176,8 @@ pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
 /// between impacts widens the tolerances to cover them: `shape_tolerance >= 1.5 x` the spread
 /// of `ln q` (between impacts, plus that of sampling at the scene's rate), `model_sigma >= `
 /// the larger spread of `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled
-/// bend, `skew_tolerance >= 1.5 x` the spread of the skewness (unless the file states them
+/// bend, `skew_tolerance >= 1.5 x` the spread of the skewness, or what of it the detector's
+/// trigger cut leaves outside its allowance if that is more (unless the file states them
 /// other than the default: a file value equal to the kernel's default is not told from a
 /// missing one). A scene whose classes carry ratio tables leaves the force and duration ratios
 /// to them (1 here), and its `model_sigma` is at least what the tables leave against direct
@@ -232,7 +233,8 @@ pub fn settings_to_kernel(
             s.model_sigma = s.model_sigma.max(spread as f32);
         }
         if s.skew_tolerance == d.skew_tolerance {
-            s.skew_tolerance = s.skew_tolerance.max((1.5 * c.skewness_spread) as f32);
+            let spread = c.skewness_spread.max(c.skewness_cut_excess);
+            s.skew_tolerance = s.skew_tolerance.max((1.5 * spread) as f32);
         }
         if s.spike_fraction == d.spike_fraction {
             s.spike_fraction = s.spike_fraction.max((1.25 * c.sharpest_bend) as f32);

@@ -821,7 +821,8 @@ fn run<const N: usize, M: Backend + Send + Sync>(
         opts.bayes_draws_per_class,
         &mut uniform,
     );
-    let reference = reference_limit(scene, &opts.reference, opts.seed)?;
+    let threshold = kernel_scene.settings().confidence_threshold() as f64;
+    let reference = reference_limit(scene, &opts.reference, opts.seed, threshold)?;
     let tally = tally(scene, &replayed.outcomes, &models, &noise, opts.n_per_class);
     let limits = Limits {
         bayes,
@@ -1313,6 +1314,8 @@ impl Evaluation {
              \x20 reference limit             {:7.3} % +- {:.3} % ({} draws, {} features, \
              duration {:?}, Cramer-Rao sigma ln F {:.4}, ln t_c {:.4})\n\
              \x20 noiseless ceiling           {:7.3} % +- {:.3} %\n\
+             \x20 coverage at the limit       {:7.3} % (Bayes posterior >= {:.4} under the \
+             scene's priors; {:.3} % of those wrong)\n\
              \x20 kernel - reference          {:+7.3} pp +- {:.3} pp\n\
              \nreliability (confidence threshold {:.4}: confident errors at most {:.2} %)\n{}",
             100.0 * r.accuracy,
@@ -1324,6 +1327,9 @@ impl Evaluation {
             r.mean_sigma_ln_duration,
             100.0 * r.noiseless_accuracy,
             100.0 * r.noiseless_std_error,
+            100.0 * r.coverage,
+            r.confidence_threshold,
+            100.0 * r.confident_error_rate,
             100.0 * d.difference,
             100.0 * d.std_error,
             self.confidence_threshold,

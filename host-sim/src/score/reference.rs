@@ -173,6 +173,15 @@ pub struct ReferenceLimit {
     pub grid: usize,
     /// Onset phases averaged.
     pub phases: usize,
+    /// The posterior a decision must reach to be confident, `1 - confident_error_rate`.
+    pub confidence_threshold: f64,
+    /// The coverage that threshold leaves at the limit under the scene's priors: the
+    /// prior-weighted share of the draws whose Bayes posterior of the decided class, at the
+    /// bound's noise, is at least `confidence_threshold`.
+    pub coverage: f64,
+    /// The prior-weighted share of those confident draws decided wrong (at most
+    /// `1 - confidence_threshold` when the Bayes posteriors are exact, whatever the priors).
+    pub confident_error_rate: f64,
 }
 
 /// One grid point: deviation from the Hertz power laws, log standard deviations, correlation.
@@ -494,19 +503,39 @@ pub fn decide(maps: &[ClassMap], f: [f64; 2], noisy: bool) -> usize {
         .0
 }
 
+/// [`decide`] at the bound's noise, and the Bayes posterior of the class it decides,
+/// `prior_c p(f | c) / sum_j prior_j p(f | j)` (0 where every density vanishes).
+pub fn decide_with_posterior(maps: &[ClassMap], f: [f64; 2]) -> (usize, f64) {
+    let scores: Vec<f64> = maps
+        .iter()
+        .map(|m| m.model.prior * m.density(f, true))
+        .collect();
+    let total: f64 = scores.iter().sum();
+    let (best, top) =
+        scores.iter().enumerate().fold(
+            (0, f64::NEG_INFINITY),
+            |b, (i, &v)| if v > b.1 { (i, v) } else { b },
+        );
+    (best, if total > 0.0 { top / total } else { 0.0 })
+}
+
 /// The Monte Carlo of the module docs, step 5, on `maps`, `draws_per_class` draws per class
-/// from `uniform` (numbers in `(0, 1)`).
+/// from `uniform` (numbers in `(0, 1)`); a decision is confident when its posterior reaches
+/// `confidence_threshold`.
 pub fn reference_accuracy(
     maps: &[ClassMap],
     draws_per_class: usize,
+    confidence_threshold: f64,
     uniform: &mut impl FnMut() -> f64,
 ) -> ReferenceLimit {
     let total_prior: f64 = maps.iter().map(|m| m.model.prior).sum();
     let n = draws_per_class.max(1);
     let (mut acc, mut acc0, mut sum_sf, mut sum_st) = (0.0, 0.0, 0.0, 0.0);
+    let (mut covered, mut covered_wrong) = (0.0, 0.0);
     let mut per_class_accuracy = Vec::with_capacity(maps.len());
     for (i, m) in maps.iter().enumerate() {
         let (mut right, mut right0) = (0usize, 0usize);
+        let (mut sure, mut sure_wrong) = (0usize, 0usize);
         for _ in 0..n {
             let (x, y) = m.model.sample(uniform(), uniform());
             let l = m.at(x, y);
@@ -519,7 +548,12 @@ pub fn reference_accuracy(
                 f[0] + sf * g1,
                 f[1] + st * (r * g1 + (1.0 - r * r).max(0.0).sqrt() * g2),
             ];
-            right += (decide(maps, noisy, true) == i) as usize;
+            let (class, posterior) = decide_with_posterior(maps, noisy);
+            right += (class == i) as usize;
+            if posterior >= confidence_threshold {
+                sure += 1;
+                sure_wrong += (class != i) as usize;
+            }
             right0 += (decide(maps, f, false) == i) as usize;
             sum_sf += sf;
             sum_st += st;
@@ -529,6 +563,8 @@ pub fn reference_accuracy(
         per_class_accuracy.push(a);
         acc += w * a;
         acc0 += w * right0 as f64 / n as f64;
+        covered += w * sure as f64 / n as f64;
+        covered_wrong += w * sure_wrong as f64 / n as f64;
     }
     let draws = n * maps.len();
     let se = |a: f64| (a * (1.0 - a) / draws as f64).sqrt();
@@ -551,14 +587,23 @@ pub fn reference_accuracy(
             .map_or(DurationFeature::FirstZero, |m| m.duration),
         grid: maps.first().map_or(0, |m| m.grid),
         phases: maps.first().map_or(0, |m| m.phases),
+        confidence_threshold,
+        coverage: covered,
+        confident_error_rate: if covered > 0.0 {
+            covered_wrong / covered
+        } else {
+            0.0
+        },
     }
 }
 
-/// The reference limit of `scene` (see the module docs), Monte Carlo seeded with `seed`.
+/// The reference limit of `scene` (see the module docs), Monte Carlo seeded with `seed`, with
+/// the coverage that `confidence_threshold` leaves at it.
 pub fn reference_limit(
     scene: &SceneFile,
     opts: &ReferenceOptions,
     seed: u64,
+    confidence_threshold: f64,
 ) -> Result<ReferenceLimit, ReferenceError> {
     if !(1..=MAX_DRAWS_PER_CLASS).contains(&opts.draws_per_class) {
         return Err(ReferenceError::Option {
@@ -571,7 +616,12 @@ pub fn reference_limit(
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(RNG_REFERENCE);
         let mut uniform = || ((rng.random::<u64>() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-        reference_accuracy(maps, opts.draws_per_class, &mut uniform)
+        reference_accuracy(
+            maps,
+            opts.draws_per_class,
+            confidence_threshold,
+            &mut uniform,
+        )
     };
     let first_zero = limit(&first_zero);
     if first_zero.features == "hertz_closed_form" {
