@@ -20,6 +20,7 @@
 //! default).
 
 use coalshock::detector::shape_fit;
+use coalshock::shape_fit::five_about;
 use coalshock::math::Libm;
 use host_sim::physics::hertz64::Material64;
 use host_sim::physics::impact::{ImpactSpec, simulate};
@@ -101,9 +102,9 @@ fn fits(series: &[(f64, f64)], peak: f64, duration_s: f64, n: f64) -> Vec<Fit> {
         let before = if i > 0 { v[i - 1] } else { 0.0 };
         let after = v.get(i + 1).copied().unwrap_or(0.0);
         let sum: f64 = v.iter().sum();
-        if let Some((f, samples)) =
-            shape_fit::<Libm>(top as f32, before as f32, after as f32, sum as f32)
-        {
+        let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+        // A damped contact's pulse is read with the three samples about its top (`five` false).
+        if let Some((f, samples)) = shape_fit::<Libm>(five_about(&v32, i), sum as f32, false) {
             let lf = (f as f64 / peak).ln();
             let lt = (samples as f64 * dt / duration_s).ln();
             out.push((n, lf, lt, (after - before) / top));

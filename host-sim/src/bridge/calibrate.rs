@@ -492,10 +492,7 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     });
     let n = all.len() as f64;
     let skew_mean = skews.iter().sum::<f64>() / n;
-    let trigger_sigmas = scene
-        .settings
-        .trigger_sigmas
-        .unwrap_or(coalshock::Settings::default().trigger_sigmas as f64);
+    let trigger_sigmas = f64::from(scene.settings.trigger_sigmas);
     let check = SkewCheck {
         trigger_counts: (trigger_sigmas * scene.sensor.noise_rms_counts).max(2.0),
         noise_counts: scene.sensor.noise_rms_counts,
