@@ -16,7 +16,7 @@
 //!                                     # (Thornton); the class's contact then yields
 //!
 //! [contact]
-//! law = "hertz"                       # (physics::law_spec::LawSpec) or hunt_crossley / lankarani_nikravesh / flores /
+//! law = "hertz"                       # or hunt_crossley / lankarani_nikravesh / flores /
 //!                                     # gonthier / tsuji { restitution }, adams { c_max_n_s_m, d_m },
 //!                                     # adams_restitution { restitution, d_m }
 //!
@@ -33,6 +33,10 @@
 //! [settings]                          # optional, any subset of the kernel's Settings
 //! confident_error_rate = 0.01       # share of class verdicts allowed to be wrong
 //! ```
+//!
+//! `[contact]` is the integrator's own `LawSpec` (`physics::law_spec`) and `[settings]` the
+//! kernel's own `Settings` (`coalshock::settings_serde`, its `serde` feature): each is written
+//! once.
 //!
 //! [`load`] reads, parses and checks a file; every error names the file, and the field or the
 //! line and column that is wrong, and in a class the class's name. Values the kernel holds in

@@ -20,10 +20,10 @@ use crate::physics::thornton::ThorntonContact;
 /// simulated with Dormand-Prince 5(4) at rtol = atol = 1e-10 (scaled state, stopping at
 /// the kink) and the simulated restitution `e(c_max)`, which falls monotonically from 1 at
 /// `c_max = 0`, is solved for the target by bracketed regula falsi (Illinois,
-/// [`crate::physics::events::illinois_until`]) on `ln c_max`, starting from the
-/// linear-oscillator estimate `c = 2 zeta m pi / t_c`, `zeta = -ln e / sqrt(pi^2 + ln^2 e)`,
-/// until `|e(c_max) - e| <= 1e-9` or the bracket on `ln c_max` is 1e-13 wide. The restitution of the result depends on the speed: it is
-/// the target only at `speed_m_s`.
+/// `events::illinois_until`) on `ln c_max`, starting from the linear-oscillator estimate
+/// `c = 2 zeta m pi / t_c`, `zeta = -ln e / sqrt(pi^2 + ln^2 e)`, until
+/// `|e(c_max) - e| <= 1e-9` or the bracket on `ln c_max` is 1e-13 wide. The restitution of
+/// the result depends on the speed: it is the target only at `speed_m_s`.
 pub fn adams_for_restitution(
     stiffness: f64,
     exponent: f64,

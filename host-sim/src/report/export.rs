@@ -1,11 +1,11 @@
 //! `host-sim export`: a scene file as Rust source that a firmware includes, a function that
-//! builds the kernel `Scene` exactly as [`crate::bridge::kernel_scene::scene_to_kernel`] builds it from the
-//! file: the same materials, classes (names, radius and speed ranges, priors), sensor chain
-//! (`SensorChain::from_plate` and, for a chain with modes or an accelerometer, its dynamics
-//! designed with the firmware's math backend) and the settings of
-//! [`crate::bridge::kernel_scene::calibrated_settings`] (the contact calibration of a damped law and the
-//! tolerances it widens), every `f32` written as the shortest literal that reads back to the
-//! same bits (`{:?}` of the `f32`).
+//! builds the kernel `Scene` exactly as [`crate::bridge::kernel_scene::scene_to_kernel`]
+//! builds it from the file: the same materials, classes (names, radius and speed ranges,
+//! priors), sensor chain (`SensorChain::from_plate` and, for a chain with modes or an
+//! accelerometer, its dynamics designed with the firmware's math backend) and the settings of
+//! [`crate::bridge::kernel_scene::calibrated_settings`] (the contact calibration of a damped
+//! law and the tolerances it widens), every `f32` written as the shortest literal that reads
+//! back to the same bits (`{:?}` of the `f32`).
 //!
 //! The firmware's scenes (`fw/replay/src/scenes/`) are made this way by `fw/stream.sh`, and
 //! `fw/stream.sh --check` fails unless they are reproduced byte for byte.

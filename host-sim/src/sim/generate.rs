@@ -262,6 +262,39 @@ fn draw_class_size_speed(
     (class, radius_m, speed_m_s)
 }
 
+/// What decides an impact's first contact: whether it is the first, when the impacts before
+/// it are over (s), its planned start (s, on the stream's clock) if any, and its uniform
+/// draws for a pile-up, the gap and the pile-up's offset.
+struct Start {
+    first: bool,
+    busy_until: f64,
+    planned_s: Option<f64>,
+    uniforms: [f64; 3],
+}
+
+impl Start {
+    /// The first contact in s and whether the impact piles up on `prev`: the planned start
+    /// (a pile-up if the previous impact is still on), or a pile-up at `pileup_offset_tc` of
+    /// the previous contact time with probability `pileup_share`, or the end of the previous
+    /// impacts plus a gap uniform in `gap_s`.
+    fn of(&self, prev: Option<&Draw>, options: &StreamOptions) -> (f64, bool) {
+        let [r_pile, r_gap, r_offset] = self.uniforms;
+        match (self.planned_s, prev) {
+            (Some(start_s), _) => (start_s, start_s < self.busy_until && !self.first),
+            (None, Some(prev)) if !self.first && r_pile < options.pileup_share => {
+                let [a, b] = options.pileup_offset_tc;
+                let offset_s = (a + r_offset * (b - a)) * prev.hertz.duration_s;
+                (prev.start_s + offset_s, true)
+            }
+            (None, _) => {
+                let [a, b] = options.gap_s;
+                let gap_s = if self.first { 0.0 } else { a + r_gap * (b - a) };
+                (self.busy_until + gap_s, false)
+            }
+        }
+    }
+}
+
 /// Phase 1: every impact's class, size, speed and first contact, in order; an impact that
 /// starts while the one before is on marks both as a pile-up. Six uniform draws per impact,
 /// whatever its source, so the stream's other draws do not depend on the source.
@@ -298,22 +331,13 @@ fn draw_impacts(
                     error,
                 }
             })?;
-        let (start_s, pileup) = match (planned, draws.last()) {
-            (Some(p), _) => {
-                let start_s = clock.phase_s + options.lead_in_s + p.start_s;
-                (start_s, start_s < busy_until && i > 0)
-            }
-            (None, Some(prev)) if i > 0 && r_pile < options.pileup_share => {
-                let [a, b] = options.pileup_offset_tc;
-                let offset_s = (a + r_offset * (b - a)) * prev.hertz.duration_s;
-                (prev.start_s + offset_s, true)
-            }
-            (None, _) => {
-                let [a, b] = options.gap_s;
-                let gap_s = if i == 0 { 0.0 } else { a + r_gap * (b - a) };
-                (busy_until + gap_s, false)
-            }
+        let start = Start {
+            first: i == 0,
+            busy_until,
+            planned_s: planned.map(|p| clock.phase_s + options.lead_in_s + p.start_s),
+            uniforms: [r_pile, r_gap, r_offset],
         };
+        let (start_s, pileup) = start.of(draws.last(), options);
         if let (true, Some(prev)) = (pileup, draws.last_mut()) {
             prev.pileup = true;
         }

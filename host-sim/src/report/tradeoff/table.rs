@@ -149,7 +149,8 @@ fn rate_lines(s: &mut String, t: &Tradeoff) {
     }
 }
 
-/// The notes under the table: the reference separability, the kernel's sizes, the firmware figures' source, refused rates, and the run's sizes.
+/// The notes under the table: the reference separability, the kernel's sizes, the firmware
+/// figures' source, refused rates, and the run's sizes.
 fn notes(s: &mut String, t: &Tradeoff) {
     let r = &t.reference;
     let _ = writeln!(s);
