@@ -160,33 +160,42 @@ fn three_point<M: Backend>(z0: f32, z1: f32, d: f32) -> f32 {
 /// `p = [F_max, k_peak, d]` (updated in place; `k_peak` kept within one sample of the largest,
 /// `d` within a factor 1.25 of `d_area`, the area's): `(gain2, weight_sum)` of the step's
 /// normal equations, `None` when they are singular or the peak leaves the positive.
-#[inline(never)]
 fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32)> {
-    let [peak, offset, d] = *p;
-    let ts = [-2.0, -1.0, 0.0, 1.0, 2.0].map(|k: f32| k - offset);
-    let (n, b, c) = normal_equations(&ts, top, peak, d);
-    let inv = inverse3(&n)?;
-    let dot = |row: &[f32; 3], v: &[f32; 3]| row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
-    let new_peak = peak + dot(&inv[0], &b);
-    if new_peak.is_nan() || new_peak <= 0.0 {
+    let ([peak, offset, d], inv, c) = gauss_newton(&[-2.0, -1.0, 0.0, 1.0, 2.0], top, *p)?;
+    if peak.is_nan() || peak <= 0.0 {
         return None;
     }
     *p = [
-        new_peak,
-        (offset + dot(&inv[1], &b)).max(-1.0).min(1.0),
-        (d + dot(&inv[2], &b)).max(0.8 * d_area).min(1.25 * d_area),
+        peak,
+        offset.max(-1.0).min(1.0),
+        d.max(0.8 * d_area).min(1.25 * d_area),
     ];
-    Some((inv[0][0], dot(&inv[0], &c)))
+    let [w0, w1, w2] = inv[0];
+    Some((w0, w0 * c[0] + w1 * c[1] + w2 * c[2]))
 }
 
-/// The Gauss-Newton normal equations of `F_max g(d t)` ([`peak_shape`]) at the sample times
-/// `ts` (samples from the peak) with values `ys`: `[n11, n12, n13, n22, n23, n33]`, the right
-/// side `b` and the column sums `c` of the columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'`
-/// and `dm/dd = F_max t g'`.
+/// One Gauss-Newton step of the least-squares fit of `F_max g(d (k - k_peak))`
+/// ([`peak_shape`]) to the samples `ys` at `ks` (samples), from `p = [F_max, k_peak, d]`, as
+/// [`five_point`] and [`flank_step`] take it: the new parameters `p + N^-1 b` (not yet kept
+/// in their ranges), the inverse `N^-1` of the normal equations and the column sums `c` (see
+/// [`normal_equations`]); `None` when `N` is singular.
 #[inline(never)]
-fn normal_equations(ts: &[f32], ys: &[f32], peak: f32, d: f32) -> ([f32; 6], [f32; 3], [f32; 3]) {
+fn gauss_newton(ks: &[f32], ys: &[f32], p: [f32; 3]) -> Option<([f32; 3], Matrix3, [f32; 3])> {
+    let (n, b, c) = normal_equations(ks, ys, p);
+    let inv = inverse3(&n)?;
+    let step = inv.map(|row| row[0] * b[0] + row[1] * b[1] + row[2] * b[2]);
+    Some(([p[0] + step[0], p[1] + step[1], p[2] + step[2]], inv, c))
+}
+
+/// The Gauss-Newton normal equations of `F_max g(d (k - k_peak))` ([`peak_shape`]) at
+/// `p = [F_max, k_peak, d]` over the samples `ys` at `ks` (samples; `t = k - k_peak`):
+/// `[n11, n12, n13, n22, n23, n33]`, the right side `b` and the column sums `c` of the
+/// columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'` and `dm/dd = F_max t g'`.
+fn normal_equations(ks: &[f32], ys: &[f32], p: [f32; 3]) -> ([f32; 6], [f32; 3], [f32; 3]) {
+    let [peak, at, d] = p;
     let (mut n, mut b, mut c) = ([0.0f32; 6], [0.0f32; 3], [0.0f32; 3]);
-    for (&t, &y) in ts.iter().zip(ys) {
+    for (&k, &y) in ks.iter().zip(ys) {
+        let t = k - at;
         let (g, slope) = peak_shape(d * t);
         let (j1, j2, j3) = (g, -peak * d * slope, peak * t * slope);
         let r = y - peak * g;
@@ -204,10 +213,13 @@ fn normal_equations(ts: &[f32], ys: &[f32], peak: f32, d: f32) -> ([f32; 6], [f3
     (n, b, c)
 }
 
+/// A 3 x 3 matrix, by rows.
+type Matrix3 = [[f32; 3]; 3];
+
 /// The inverse of the symmetric 3 x 3 matrix `[[a, b, c], [b, e, f], [c, f, i]]`, given as
 /// `[a, b, c, e, f, i]`, by its cofactors; `None` when it is singular to within f32
 /// (determinant below `1e-6` of its diagonal's product).
-fn inverse3(&[a, b, c, e, f, i]: &[f32; 6]) -> Option<[[f32; 3]; 3]> {
+fn inverse3(&[a, b, c, e, f, i]: &[f32; 6]) -> Option<Matrix3> {
     let cof = [
         [e * i - f * f, c * f - b * i, b * f - c * e],
         [c * f - b * i, a * i - c * c, b * c - a * f],
@@ -298,25 +310,22 @@ pub fn flank_fit(
     })
 }
 
-/// One Gauss-Newton step of [`flank_fit`] over the samples `ys` at `ks`, `p = [F_max, k_peak,
-/// d]` updated in place (`d` kept within `d_range`, `k_peak` within one sample of `middle`):
-/// the inverse of the normal equations, `None` when they are singular.
-#[inline(never)]
+/// One Gauss-Newton step of [`flank_fit`] over the samples `ys` at `ks` ([`gauss_newton`]),
+/// `p = [F_max, k_peak, d]` updated in place (`F_max` kept above half its value, `d` within
+/// `d_range`, `k_peak` within one sample of `middle`): the inverse of the normal equations,
+/// `None` when they are singular.
 fn flank_step(
     ks: &[f32; 4],
     ys: &[f32; 4],
     p: &mut [f32; 3],
     (d_lo, d_hi): (f32, f32),
     middle: f32,
-) -> Option<[[f32; 3]; 3]> {
-    let [peak, at, d] = *p;
-    let (n, b, _) = normal_equations(&ks.map(|k| k - at), ys, peak, d);
-    let inv = inverse3(&n)?;
-    let dot = |row: &[f32; 3]| row[0] * b[0] + row[1] * b[1] + row[2] * b[2];
+) -> Option<Matrix3> {
+    let ([peak, at, d], inv, _) = gauss_newton(ks, ys, *p)?;
     *p = [
-        (peak + dot(&inv[0])).max(0.5 * peak),
-        (at + dot(&inv[1])).max(middle - 1.0).min(middle + 1.0),
-        (d + dot(&inv[2])).max(d_lo).min(d_hi),
+        peak.max(0.5 * p[0]),
+        at.max(middle - 1.0).min(middle + 1.0),
+        d.max(d_lo).min(d_hi),
     ];
     Some(inv)
 }

@@ -20,8 +20,8 @@
 //! default).
 
 use coalshock::detector::shape_fit;
-use coalshock::shape_fit::five_about;
 use coalshock::math::Libm;
+use coalshock::shape_fit::five_about;
 use host_sim::physics::hertz64::Material64;
 use host_sim::physics::impact::{ImpactSpec, simulate};
 use host_sim::physics::law_spec::LawSpec;
