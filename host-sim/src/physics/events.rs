@@ -1,14 +1,14 @@
 //! Root location on a step's continuous output: the earliest sign change of a switching
 //! function inside a step, found so that none is stepped over.
 //!
-//! A step's continuous output is a quartic in `theta` in [0, 1] for each component of the
-//! scaled state ([`Quartic`]). [`earliest_root`] halves `[a, b]` and drops a half only when an
+//! A step's continuous output is a polynomial in `theta` in [0, 1] for each component of the
+//! scaled state ([`Poly`], of the degree of the method's continuous output: 3 to 7). [`earliest_root`] halves `[a, b]` and drops a half only when an
 //! enclosure proves that the function has no sign change there ([`Enclosure`]): for a
 //! polynomial switching function (contact end `x`, Adams kink `x - x_d`) its Bernstein
-//! coefficients on the half (the quartic lies in their convex hull; with non-zero end
+//! coefficients on the half (the polynomial lies in their convex hull; with non-zero end
 //! coefficients, at most one sign variation means at most one root inside, by Descartes' rule
 //! for the Bernstein basis, so no further halving is needed), for the clamp a bound of the
-//! law's switching function over the box of states that the quartics take on the half. Left
+//! law's switching function over the box of states that the polynomials take on the half. Left
 //! halves are searched first, so the first root found is the earliest. A half narrower than
 //! `2^-MAX_DEPTH` of the interval is not split further; its bracket, if any, is refined by
 //! Illinois regula falsi.
@@ -16,52 +16,88 @@
 /// Halvings of the searched interval before a bracket is refined as it is.
 const MAX_DEPTH: u32 = 30;
 
-/// A quartic `c0 + c1 theta + c2 theta^2 + c3 theta^3 + c4 theta^4` (power basis).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Quartic(pub [f64; 5]);
+/// Most coefficients of a [`Poly`]: degree 7 (Dop853's continuous output).
+pub(crate) const MAX_COEFFS: usize = 8;
 
-impl Quartic {
+/// A polynomial `c0 + c1 theta + ... + c_deg theta^deg` (power basis) of degree at most 7:
+/// a component of a step's continuous output (cubic for Rodas4, quartic for Dopri5 and RK4's
+/// Hermite interpolant padded with a zero, degree 7 for Dop853).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Poly {
+    /// Coefficients `c_0 ..= c_deg`; the rest are 0.
+    pub c: [f64; MAX_COEFFS],
+    /// Degree (at most 7).
+    pub deg: usize,
+}
+
+impl Poly {
+    /// The quartic `c0 + ... + c4 theta^4`.
+    pub fn quartic(c: [f64; 5]) -> Self {
+        let mut out = [0.0; MAX_COEFFS];
+        out[..5].copy_from_slice(&c);
+        Self { c: out, deg: 4 }
+    }
+
     /// Value at `theta` (Horner).
     pub fn eval(&self, theta: f64) -> f64 {
-        let c = &self.0;
-        c[0] + theta * (c[1] + theta * (c[2] + theta * (c[3] + theta * c[4])))
+        let mut acc = self.c[self.deg];
+        for &ci in self.c[..self.deg].iter().rev() {
+            acc = ci + theta * acc;
+        }
+        acc
     }
 
-    /// The quartic minus the constant `x`.
+    /// The polynomial minus the constant `x`.
     pub fn minus(&self, x: f64) -> Self {
-        let mut c = self.0;
-        c[0] -= x;
-        Self(c)
+        let mut p = *self;
+        p.c[0] -= x;
+        p
     }
 
-    /// Bernstein coefficients of the quartic restricted to `[a, b]`: Taylor shift to `a`
-    /// (`q_j = p^(j)(a) (b - a)^j / j!`), then `b_i = sum_j C(i, j) / C(4, j) q_j`.
-    pub fn bernstein(&self, a: f64, b: f64) -> [f64; 5] {
-        let mut q = self.0;
-        for i in 0..4 {
-            for j in (i..4).rev() {
+    /// Bernstein coefficients `b_0 ..= b_deg` of the polynomial restricted to `[a, b]`
+    /// (the rest 0): Taylor shift to `a` (`q_j = p^(j)(a) (b - a)^j / j!`), then
+    /// `b_i = sum_(j <= i) C(i, j) / C(deg, j) q_j`.
+    pub fn bernstein(&self, a: f64, b: f64) -> [f64; MAX_COEFFS] {
+        let n = self.deg;
+        let mut q = self.c;
+        for i in 0..n {
+            for j in (i..n).rev() {
                 q[j] += a * q[j + 1];
             }
         }
         let w = b - a;
         let mut wj = w;
-        for qj in q.iter_mut().skip(1) {
+        for qj in q.iter_mut().take(n + 1).skip(1) {
             *qj *= wj;
             wj *= w;
         }
-        [
-            q[0],
-            q[0] + 0.25 * q[1],
-            q[0] + 0.5 * q[1] + q[2] / 6.0,
-            q[0] + 0.75 * q[1] + 0.5 * q[2] + 0.25 * q[3],
-            q[0] + q[1] + q[2] + q[3] + q[4],
-        ]
+        let mut out = [0.0; MAX_COEFFS];
+        if n == 4 {
+            // The quartic's weights written out (Dopri5's and RK4's events depend on these
+            // roundings bit for bit).
+            out[..5].copy_from_slice(&[
+                q[0],
+                q[0] + 0.25 * q[1],
+                q[0] + 0.5 * q[1] + q[2] / 6.0,
+                q[0] + 0.75 * q[1] + 0.5 * q[2] + 0.25 * q[3],
+                q[0] + q[1] + q[2] + q[3] + q[4],
+            ]);
+            return out;
+        }
+        for (i, bi) in out.iter_mut().enumerate().take(n + 1) {
+            *bi = (0..=i)
+                .map(|j| binomial(i, j) / binomial(n, j) * q[j])
+                .sum();
+        }
+        out
     }
 
-    /// Bounds `(lo, hi)` of the quartic on `[a, b]` (the hull of its Bernstein coefficients).
+    /// Bounds `(lo, hi)` of the polynomial on `[a, b]` (the hull of its Bernstein
+    /// coefficients).
     pub fn range(&self, a: f64, b: f64) -> (f64, f64) {
         let bs = self.bernstein(a, b);
-        bs.iter()
+        bs[..=self.deg]
+            .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
                 (lo.min(x), hi.max(x))
             })
@@ -69,11 +105,12 @@ impl Quartic {
 
     /// What the Bernstein coefficients on `[a, b]` say about the roots there.
     pub fn enclosure(&self, a: f64, b: f64) -> Enclosure {
-        let bs = self.bernstein(a, b);
+        let all = self.bernstein(a, b);
+        let bs = &all[..=self.deg];
         if bs.iter().all(|&x| x > 0.0) || bs.iter().all(|&x| x < 0.0) {
             return Enclosure::NoRoot;
         }
-        if bs[0] == 0.0 || bs[4] == 0.0 {
+        if bs[0] == 0.0 || bs[self.deg] == 0.0 {
             // A root at an end: the count below is for the open interval only.
             return Enclosure::Unknown;
         }
@@ -89,6 +126,11 @@ impl Quartic {
             Enclosure::Unknown
         }
     }
+}
+
+/// The binomial coefficient `C(n, k)` as f64 (exact for `n <= 7`).
+fn binomial(n: usize, k: usize) -> f64 {
+    (0..k).fold(1.0, |acc, i| acc * (n - i) as f64 / (i + 1) as f64)
 }
 
 /// What is known about the roots of a switching function on an interval.
@@ -196,7 +238,7 @@ mod tests {
             }
             c = n;
         }
-        let p = Quartic(c);
+        let p = Poly::quartic(c);
         let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.0, 1.0);
         assert!((th.expect("a root") - 0.2).abs() < 1e-14);
         // A pair of roots inside with no sign change between the ends is not stepped over.

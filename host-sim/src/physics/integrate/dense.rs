@@ -1,28 +1,77 @@
 //! A step's continuous output (dense output) and the lookup of the step that holds a time.
 
-use crate::physics::events::Quartic;
+use crate::physics::events::{MAX_COEFFS, Poly};
 
-/// A step's continuous output `y(theta) = r0 + theta (r1 + (1 - theta) (r2 + theta (r3 +
-/// (1 - theta) r4)))` for `theta` in [0, 1], in scaled units (Hairer's `CONTD5` form; with
-/// `r4 = 0` it is the cubic Hermite interpolant).
+/// A step's continuous output in Hairer's nested form
+/// `y(theta) = r0 + theta (r1 + (1 - theta) (r2 + theta (r3 + (1 - theta) (r4 + ...))))`
+/// for `theta` in [0, 1], in scaled units, with `n` coefficients per component: 5 for
+/// Dopri5 (`CONTD5`) and RK4 (the cubic Hermite interpolant, `r4 = 0`), 8 for Dop853
+/// (`CONTD8`), 4 for Rodas4 (`(1 - theta) y0 + theta (y1 + (1 - theta) (d2 + theta d3))`).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Segment {
+    /// Scaled time of the step's start.
     pub(super) t0: f64,
+    /// Scaled step size.
     pub(super) h: f64,
-    pub(super) r: [[f64; 5]; 2],
+    /// Coefficients `r_0 .. r_(n-1)` of `x` and `v`; the rest are 0.
+    pub(super) r: [[f64; MAX_COEFFS]; 2],
+    /// Coefficients in use (at most [`MAX_COEFFS`]).
+    pub(super) n: usize,
 }
 
 impl Segment {
+    /// A segment from the coefficients of `x` and `v` (`r[i].len()` of each used).
+    pub(super) fn nested<const N: usize>(t0: f64, h: f64, r: [[f64; N]; 2]) -> Self {
+        let mut out = [[0.0; MAX_COEFFS]; 2];
+        for (o, ri) in out.iter_mut().zip(&r) {
+            o[..N].copy_from_slice(ri);
+        }
+        Self {
+            t0,
+            h,
+            r: out,
+            n: N,
+        }
+    }
+
+    /// The state at step fraction `theta` (nested evaluation from the innermost term).
     pub(super) fn eval(&self, theta: f64) -> [f64; 2] {
         let th1 = 1.0 - theta;
-        let c = |r: &[f64; 5]| r[0] + theta * (r[1] + th1 * (r[2] + theta * (r[3] + th1 * r[4])));
+        let n = self.n;
+        let c = |r: &[f64; MAX_COEFFS]| {
+            let mut acc = r[n - 1];
+            for i in (0..n - 1).rev() {
+                acc = r[i] + if i % 2 == 0 { theta } else { th1 } * acc;
+            }
+            acc
+        };
         [c(&self.r[0]), c(&self.r[1])]
     }
 
-    /// Component `i` of the output as a power-basis quartic in `theta`.
-    pub(super) fn quartic(&self, i: usize) -> Quartic {
-        let [r0, r1, r2, r3, r4] = self.r[i];
-        Quartic([r0, r1 + r2, r3 + r4 - r2, -(r3 + 2.0 * r4), r4])
+    /// Component `i` of the output as a power-basis polynomial in `theta` of degree `n - 1`.
+    pub(super) fn poly(&self, i: usize) -> Poly {
+        let r = &self.r[i];
+        if self.n == 5 {
+            // Dopri5's and RK4's quartic as it always was written (bit for bit).
+            let [r0, r1, r2, r3, r4] = [r[0], r[1], r[2], r[3], r[4]];
+            return Poly::quartic([r0, r1 + r2, r3 + r4 - r2, -(r3 + 2.0 * r4), r4]);
+        }
+        // Expand from the innermost term: times theta shifts, times (1 - theta) subtracts the
+        // shift.
+        let mut c = [0.0; MAX_COEFFS];
+        c[0] = r[self.n - 1];
+        for k in (0..self.n - 1).rev() {
+            let mut shifted = [0.0; MAX_COEFFS];
+            shifted[1..].copy_from_slice(&c[..MAX_COEFFS - 1]);
+            if k % 2 == 1 {
+                for (s, ci) in shifted.iter_mut().zip(&c) {
+                    *s = ci - *s;
+                }
+            }
+            c = shifted;
+            c[0] += r[k];
+        }
+        Poly { c, deg: self.n - 1 }
     }
 
     pub(super) fn hermite(
@@ -39,7 +88,7 @@ impl Segment {
             let bspl = h * f0[i] - ydiff;
             r[i] = [y0[i], ydiff, bspl, ydiff - h * f1[i] - bspl, 0.0];
         }
-        Self { t0, h, r }
+        Self::nested(t0, h, r)
     }
 }
 

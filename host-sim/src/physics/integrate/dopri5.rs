@@ -89,7 +89,7 @@ pub(super) fn dopri_step(
         y1,
         f1: k7,
         force1_n: rhs.last_force_n,
-        seg: Segment { t0: t, h, r },
+        seg: Segment::nested(t, h, r),
         err: (err2 / 2.0).sqrt(),
     }
 }

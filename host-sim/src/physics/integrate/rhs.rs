@@ -15,6 +15,8 @@ pub(super) struct Rhs {
     /// T / (u m)
     pub(super) p: f64,
     pub(super) evals: usize,
+    /// Evaluations of the Jacobian.
+    pub(super) jac_evals: usize,
     /// The force (N) of the last evaluation.
     pub(super) last_force_n: f64,
 }
@@ -25,6 +27,31 @@ impl Rhs {
         let force = self.law.force(y[0] * self.d_m, y[1] * self.u_m_s);
         self.last_force_n = force;
         [self.cx * y[1], self.g - self.p * force]
+    }
+
+    /// The exact Jacobian `d(dx/dtau, dv/dtau) / d(x, v)` at `y`:
+    /// `[[0, cx], [-p delta_max dF/ddelta, -p u dF/ddelta_dot]]` from
+    /// [`ForceLaw::force_gradient`] (rows: the two rates).
+    pub(super) fn jac(&mut self, y: [f64; 2]) -> [[f64; 2]; 2] {
+        self.jac_evals += 1;
+        let (dfd, dfv) = self.law.force_gradient(y[0] * self.d_m, y[1] * self.u_m_s);
+        [
+            [0.0, self.cx],
+            [-self.p * self.d_m * dfd, -self.p * self.u_m_s * dfv],
+        ]
+    }
+}
+
+/// The largest modulus of the eigenvalues of a 2 x 2 matrix `j` (its spectral radius).
+pub(super) fn spectral_radius(j: [[f64; 2]; 2]) -> f64 {
+    let half_tr = 0.5 * (j[0][0] + j[1][1]);
+    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+    let disc = half_tr * half_tr - det;
+    if disc >= 0.0 {
+        let r = disc.sqrt();
+        (half_tr + r).abs().max((half_tr - r).abs())
+    } else {
+        det.abs().sqrt()
     }
 }
 
@@ -47,6 +74,6 @@ pub(super) struct Trial {
     /// The force (N) at `y1`.
     pub(super) force1_n: f64,
     pub(super) seg: Segment,
-    /// Scaled error norm (Dopri5), 0 for RK4.
+    /// Scaled error norm (adaptive methods), 0 for RK4.
     pub(super) err: f64,
 }

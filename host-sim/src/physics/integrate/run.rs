@@ -2,7 +2,7 @@
 //! stopping and restarting at every event.
 
 use crate::physics::hertz64::{HERTZ_TC_FACTOR, positive};
-use crate::physics::integrate::control::StepControl;
+use crate::physics::integrate::control::{StepControl, Stepper};
 use crate::physics::integrate::dense::Segment;
 use crate::physics::integrate::peak::finish;
 use crate::physics::integrate::rhs::{Rhs, Trial};
@@ -30,7 +30,7 @@ pub(super) fn validate_contact(
             requirement: "finite and >= 0",
         });
     }
-    if let Method::Dopri5 = method {
+    if !matches!(method, Method::Rk4 { .. }) {
         positive("tolerance.rtol", tol.rtol)?;
         positive("tolerance.atol", tol.atol)?;
     }
@@ -116,6 +116,7 @@ impl ContactRun {
             g: time_s * problem.gravity_m_s2 / u,
             p: time_s / (u * problem.mass_kg),
             evals: 0,
+            jac_evals: 0,
             last_force_n: 0.0,
         };
         let y = [0.0, 1.0];
@@ -178,6 +179,17 @@ impl ContactRun {
                 None => None,
             },
         )
+    }
+
+    /// After an accepted step (whole or to an event): counts a stiff step, lets
+    /// [`Method::Auto`] choose the next stepper, and sets the next trial step `h_next`.
+    fn accepted(&mut self, ctl: &mut StepControl, h_next: f64) {
+        if ctl.stepper == Stepper::Rodas4 {
+            self.work.stiff_steps += 1;
+        }
+        let h_taken = self.segments.last().map_or(h_next, |s| s.h);
+        ctl.choose(&mut self.rhs, h_taken, self.y);
+        ctl.advance(h_next);
     }
 
     /// Takes the accepted `trial` of size `h` whole.
@@ -252,6 +264,7 @@ impl ContactRun {
         let rebound = -y_e[1] * self.scales.speed_m_s;
         let duration_s = t_e * self.scales.time_s;
         self.work.force_evals = self.rhs.evals;
+        self.work.jacobian_evals = self.rhs.jac_evals;
         finish(
             (self.law, self.turned),
             self.scales,
@@ -304,11 +317,11 @@ pub fn integrate_contact(
             Ok(Some(event)) => match run.step_to_event(&mut ctl, event, problem) {
                 EventStep::Retry => {}
                 EventStep::End(solution) => return Ok(*solution),
-                EventStep::Restart => ctl.advance(h_next),
+                EventStep::Restart => run.accepted(&mut ctl, h_next),
             },
             Ok(None) => {
                 run.take(trial, ctl.h);
-                ctl.advance(h_next);
+                run.accepted(&mut ctl, h_next);
             }
         }
     }

@@ -1,7 +1,7 @@
 //! The event search of an accepted step: the earliest sign change of the contact end, the
 //! kink, the turn and the clamp's switching function on the step's continuous output.
 
-use crate::physics::events::{Enclosure, Quartic, earliest_root};
+use crate::physics::events::{Enclosure, Poly, earliest_root};
 use crate::physics::integrate::dense::Segment;
 use crate::physics::laws::ForceLaw;
 
@@ -62,29 +62,29 @@ pub(super) fn find_event(
     clamp_budget: usize,
 ) -> Option<Event> {
     let (x_end, await_turn) = ends;
-    let x = seg.quartic(0);
+    let x = seg.poly(0);
     let poly_root =
-        |p: Quartic, a: f64| earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0);
+        |p: Poly, a: f64| earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0);
     // At first contact x(0) = 0: that root is the start, not an end.
     let x_rel = x.minus(x_end);
     let end = poly_root(
         x_rel,
-        if x_rel.0[0] == 0.0 {
+        if x_rel.c[0] == 0.0 {
             RESTART_THETA
         } else {
             0.0
         },
     );
     let turn = if await_turn {
-        let v = seg.quartic(1);
-        poly_root(v, if v.0[0] == 0.0 { RESTART_THETA } else { 0.0 })
+        let v = seg.poly(1);
+        poly_root(v, if v.c[0] == 0.0 { RESTART_THETA } else { 0.0 })
     } else {
         None
     };
     let mut kink = None;
     if let Some(xk) = x_kink {
         let g = x.minus(xk);
-        if g.0[0] == 0.0 {
+        if g.c[0] == 0.0 {
             // Restarted on the kink: a return across it inside this step needs a smaller step.
             if poly_root(g, RESTART_THETA).is_some() {
                 return Some(Event::Retry);
@@ -101,7 +101,7 @@ pub(super) fn find_event(
         });
     let hi = first.unwrap_or(1.0);
     let switch = clamp.filter(|_| clamp_budget > 0).and_then(|sw| {
-        let v = seg.quartic(1);
+        let v = seg.poly(1);
         earliest_root(
             &|th| sw.value([x.eval(th), v.eval(th)]),
             &|a, b| sw.enclosure(x.range(a, b), v.range(a, b)),
