@@ -250,4 +250,36 @@ mod tests {
             assert!(lo <= v && v <= hi);
         }
     }
+
+    /// A degree-7 polynomial (Dop853's output degree) with roots 0.3, 0.31, 0.32 and four
+    /// outside [0, 1]: the earliest root is found from either end's sign, and the Bernstein
+    /// hull encloses every value.
+    #[test]
+    fn degree_seven_roots_and_hull() {
+        let roots = [0.3, 0.31, 0.32, -1.0, 1.5, 2.0, 3.0];
+        let mut c = [0.0; MAX_COEFFS];
+        c[0] = 1.0;
+        for (deg, r) in roots.iter().enumerate() {
+            let mut n = [0.0; MAX_COEFFS];
+            for i in 0..=deg + 1 {
+                n[i] = -r * c[i] + if i > 0 { c[i - 1] } else { 0.0 };
+            }
+            c = n;
+        }
+        let p = Poly { c, deg: 7 };
+        let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.0, 1.0);
+        assert!((th.expect("a root") - 0.3).abs() < 1e-11, "{th:?}");
+        let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.305, 1.0);
+        assert!((th.expect("a root") - 0.31).abs() < 1e-11);
+        for (a, b) in [(0.0, 1.0), (0.25, 0.5)] {
+            let (lo, hi) = p.range(a, b);
+            for i in 0..=100 {
+                let v = p.eval(a + (b - a) * f64::from(i) / 100.0);
+                assert!(
+                    lo - 1e-15 <= v && v <= hi + 1e-15,
+                    "{v} outside [{lo}, {hi}]"
+                );
+            }
+        }
+    }
 }
