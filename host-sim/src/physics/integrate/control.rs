@@ -243,13 +243,19 @@ impl StepControl {
     /// [`Method::Auto`] after an accepted step of size `h` that ended at `y`: Dop853 turns to
     /// Rodas4 when `h rho(J(y)) > STIFF_H_RHO` (the step is held by stability, not accuracy),
     /// Rodas4 back to Dop853 after [`CALM_STEPS`] steps with `h rho(J) < CALM_H_RHO`. One
-    /// Jacobian per accepted step; nothing for the other methods.
+    /// Jacobian per accepted Dop853 step (Rodas4's own at its step's start serves otherwise);
+    /// nothing for the other methods.
     pub(super) fn choose(&mut self, rhs: &mut Rhs, h: f64, y: [f64; 2]) {
         self.x_peak = self.x_peak.max(y[0]);
         if self.method != Method::Auto {
             return;
         }
-        let h_rho = h * spectral_radius(rhs.jac(y));
+        // On Rodas4 the Jacobian its step just used (at the step's start) serves.
+        let j = match (self.stepper, rhs.last_jac) {
+            (Stepper::Rodas4, Some(j)) => j,
+            _ => rhs.jac(y),
+        };
+        let h_rho = h * spectral_radius(j);
         let next = match self.stepper {
             Stepper::Dop853 if h_rho > STIFF_H_RHO => Stepper::Rodas4,
             Stepper::Rodas4 if h_rho < CALM_H_RHO => {

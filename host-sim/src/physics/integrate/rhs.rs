@@ -17,6 +17,8 @@ pub(super) struct Rhs {
     pub(super) evals: usize,
     /// Evaluations of the Jacobian.
     pub(super) jac_evals: usize,
+    /// The last Jacobian evaluated.
+    pub(super) last_jac: Option<[[f64; 2]; 2]>,
     /// The force (N) of the last evaluation.
     pub(super) last_force_n: f64,
 }
@@ -35,10 +37,12 @@ impl Rhs {
     pub(super) fn jac(&mut self, y: [f64; 2]) -> [[f64; 2]; 2] {
         self.jac_evals += 1;
         let (dfd, dfv) = self.law.force_gradient(y[0] * self.d_m, y[1] * self.u_m_s);
-        [
+        let j = [
             [0.0, self.cx],
             [-self.p * self.d_m * dfd, -self.p * self.u_m_s * dfv],
-        ]
+        ];
+        self.last_jac = Some(j);
+        j
     }
 }
 

@@ -117,6 +117,7 @@ impl ContactRun {
             p: time_s / (u * problem.mass_kg),
             evals: 0,
             jac_evals: 0,
+            last_jac: None,
             last_force_n: 0.0,
         };
         let y = [0.0, 1.0];
