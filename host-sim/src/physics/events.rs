@@ -153,10 +153,25 @@ pub(crate) fn earliest_root(
     a: f64,
     b: f64,
 ) -> Option<f64> {
+    earliest_root_within(g, enclose, a, b, usize::MAX)
+}
+
+/// [`earliest_root`] with at most `max_splits` halvings in all: once they are spent, a part
+/// that no enclosure has settled is searched only for a sign change between its ends (as at
+/// the depth limit). A function that hovers at zero over the whole interval (a law sliding
+/// along its clamp) would otherwise cost up to `2^MAX_DEPTH` halvings.
+pub(crate) fn earliest_root_within(
+    g: &dyn Fn(f64) -> f64,
+    enclose: &dyn Fn(f64, f64) -> Enclosure,
+    a: f64,
+    b: f64,
+    max_splits: usize,
+) -> Option<f64> {
     if b <= a || b.is_nan() {
         return None;
     }
-    search(g, enclose, (a, g(a)), (b, g(b)), MAX_DEPTH)
+    let splits = core::cell::Cell::new(max_splits);
+    search(g, enclose, (a, g(a)), (b, g(b)), MAX_DEPTH, &splits)
 }
 
 fn search(
@@ -165,17 +180,21 @@ fn search(
     (a, ga): (f64, f64),
     (b, gb): (f64, f64),
     depth: u32,
+    splits: &core::cell::Cell<usize>,
 ) -> Option<f64> {
     let crossing = ga != 0.0 && ga * gb <= 0.0;
     match enclose(a, b) {
         Enclosure::NoRoot => None,
         Enclosure::AtMostOne => crossing.then(|| illinois(g, a, ga, b, gb)),
-        Enclosure::Unknown if depth == 0 => crossing.then(|| illinois(g, a, ga, b, gb)),
+        Enclosure::Unknown if depth == 0 || splits.get() == 0 => {
+            crossing.then(|| illinois(g, a, ga, b, gb))
+        }
         Enclosure::Unknown => {
+            splits.set(splits.get() - 1);
             let m = 0.5 * (a + b);
             let gm = g(m);
-            search(g, enclose, (a, ga), (m, gm), depth - 1)
-                .or_else(|| search(g, enclose, (m, gm), (b, gb), depth - 1))
+            search(g, enclose, (a, ga), (m, gm), depth - 1, splits)
+                .or_else(|| search(g, enclose, (m, gm), (b, gb), depth - 1, splits))
         }
     }
 }

@@ -29,6 +29,12 @@ pub(super) const STIFF_H_RHO: f64 = 4.0;
 pub(super) const CALM_H_RHO: f64 = 1.0;
 /// See [`CALM_H_RHO`].
 pub(super) const CALM_STEPS: u32 = 3;
+/// Halvings the clamp's event search may spend on one step of Dop853, Rodas4 and Auto. A
+/// heavily damped contact creeps out along its clamp (the unclamped force stays within
+/// rounding of zero for hundreds of steps), where the enclosures settle nothing and an
+/// unbounded search costs 2^depth evaluations; past this many halvings a part is searched for
+/// a sign change between its ends only. Dopri5 and RK4 search without a bound, as before.
+pub(super) const CLAMP_SPLITS: usize = 16;
 
 /// The error scale of every adaptive method but Dopri5: component `i` that went from `y0`
 /// to `y1` in a step has `sk = rtol m + atol min(1, max(m, floor_i))`, `m = max(|y0|, |y1|)`,
@@ -309,6 +315,14 @@ impl StepControl {
         };
         self.h = he * shrink;
         self.last_rejected = true;
+    }
+
+    /// Halvings the clamp's event search may spend on a step (see [`CLAMP_SPLITS`]).
+    pub(super) fn clamp_splits(&self) -> usize {
+        match self.method {
+            Method::Dopri5 | Method::Rk4 { .. } => usize::MAX,
+            _ => CLAMP_SPLITS,
+        }
     }
 
     /// After an accepted step: the next trial is `h_next`, unscaled.

@@ -156,8 +156,13 @@ impl ContactRun {
     }
 
     /// The first event inside `trial` (see [`find_event`]), as `(theta, landing, is_end)`;
-    /// `Err(())` when the search asks for a smaller step.
-    pub(super) fn event_in(&self, trial: &Trial) -> Result<Option<(f64, Landing, bool)>, ()> {
+    /// `Err(())` when the search asks for a smaller step. The clamp's search may halve the
+    /// step `clamp_splits` times ([`StepControl::clamp_splits`]).
+    pub(super) fn event_in(
+        &self,
+        trial: &Trial,
+        clamp_splits: usize,
+    ) -> Result<Option<(f64, Landing, bool)>, ()> {
         let ends = (
             self.rhs.law.contact_end_m() / self.scales.delta_m,
             self.rhs.law.awaits_turn(),
@@ -168,7 +173,10 @@ impl ContactRun {
                 self.x_kink,
                 ends,
                 self.law.is_clamped().then_some(&self.clamp_switch),
-                MAX_CLAMP_RESTARTS.saturating_sub(self.work.clamp_restarts),
+                (
+                    MAX_CLAMP_RESTARTS.saturating_sub(self.work.clamp_restarts),
+                    clamp_splits,
+                ),
             ) {
                 Some(Event::Retry) => return Err(()),
                 Some(Event::End(th)) => Some((th, Landing::X(ends.0), true)),
@@ -310,7 +318,7 @@ pub fn integrate_contact(
             run.work.rejected_steps += 1;
             continue;
         };
-        match run.event_in(&trial) {
+        match run.event_in(&trial, ctl.clamp_splits()) {
             Err(()) => {
                 run.work.rejected_steps += 1;
                 ctl.halve();

@@ -1,7 +1,7 @@
 //! The event search of an accepted step: the earliest sign change of the contact end, the
 //! kink, the turn and the clamp's switching function on the step's continuous output.
 
-use crate::physics::events::{Enclosure, Poly, earliest_root};
+use crate::physics::events::{Enclosure, Poly, earliest_root, earliest_root_within};
 use crate::physics::integrate::dense::Segment;
 use crate::physics::laws::ForceLaw;
 
@@ -52,14 +52,15 @@ pub(super) const RESTART_THETA: f64 = 1e-9;
 
 /// Searches an accepted step for the earliest event, on every sign change of `x` (contact
 /// end), of `x - x_d` (Adams kink) and of the clamp's switching function (while
-/// `clamp_budget > 0`), see [`crate::physics::events`]. The clamp is searched only up to the
+/// `clamp_budget > 0`, with at most `clamp_splits` halvings), see [`crate::physics::events`].
+/// The clamp is searched only up to the
 /// earlier of the end and the kink.
 pub(super) fn find_event(
     seg: &Segment,
     x_kink: Option<f64>,
     ends: (f64, bool),
     clamp: Option<&ClampSwitch>,
-    clamp_budget: usize,
+    (clamp_budget, clamp_splits): (usize, usize),
 ) -> Option<Event> {
     let (x_end, await_turn) = ends;
     let x = seg.poly(0);
@@ -102,11 +103,12 @@ pub(super) fn find_event(
     let hi = first.unwrap_or(1.0);
     let switch = clamp.filter(|_| clamp_budget > 0).and_then(|sw| {
         let v = seg.poly(1);
-        earliest_root(
+        earliest_root_within(
             &|th| sw.value([x.eval(th), v.eval(th)]),
             &|a, b| sw.enclosure(x.range(a, b), v.range(a, b)),
             RESTART_THETA,
             hi,
+            clamp_splits,
         )
     });
     match (switch, first) {
