@@ -84,10 +84,9 @@ impl Poly {
             ]);
             return out;
         }
-        for (i, bi) in out.iter_mut().enumerate().take(n + 1) {
-            *bi = (0..=i)
-                .map(|j| binomial(i, j) / binomial(n, j) * q[j])
-                .sum();
+        let weights = &BERNSTEIN_WEIGHTS[n];
+        for (bi, wi) in out.iter_mut().zip(weights).take(n + 1) {
+            *bi = wi[..=n].iter().zip(&q).map(|(w, qj)| w * qj).sum();
         }
         out
     }
@@ -128,10 +127,39 @@ impl Poly {
     }
 }
 
-/// The binomial coefficient `C(n, k)` as f64 (exact for `n <= 7`).
-fn binomial(n: usize, k: usize) -> f64 {
-    (0..k).fold(1.0, |acc, i| acc * (n - i) as f64 / (i + 1) as f64)
+/// The binomial coefficient `C(n, k)` as f64 (exact for `n <= 7`; 0 for `k > n`).
+const fn binomial(n: usize, k: usize) -> f64 {
+    if k > n {
+        return 0.0;
+    }
+    let mut acc = 1.0;
+    let mut i = 0;
+    while i < k {
+        acc = acc * (n - i) as f64 / (i + 1) as f64;
+        i += 1;
+    }
+    acc
 }
+
+/// `BERNSTEIN_WEIGHTS[n][i][j] = C(i, j) / C(n, j)` (0 for `j > i`): the weights that turn
+/// the scaled Taylor coefficients of a degree-`n` polynomial into its Bernstein coefficients.
+const BERNSTEIN_WEIGHTS: [[[f64; MAX_COEFFS]; MAX_COEFFS]; MAX_COEFFS] = {
+    let mut w = [[[0.0; MAX_COEFFS]; MAX_COEFFS]; MAX_COEFFS];
+    let mut n = 0;
+    while n < MAX_COEFFS {
+        let mut i = 0;
+        while i <= n {
+            let mut j = 0;
+            while j <= i {
+                w[n][i][j] = binomial(i, j) / binomial(n, j);
+                j += 1;
+            }
+            i += 1;
+        }
+        n += 1;
+    }
+    w
+};
 
 /// What is known about the roots of a switching function on an interval.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -364,12 +364,12 @@ const D: [[f64; 16]; 4] = [
 
 /// `y + h sum_j a_j k_j` over the stages given.
 fn combine(y: [f64; 2], h: f64, a: &[f64], ks: &[[f64; 2]]) -> [f64; 2] {
-    let mut out = y;
-    for (i, o) in out.iter_mut().enumerate() {
-        let acc: f64 = a.iter().zip(ks).map(|(aj, k)| aj * k[i]).sum();
-        *o += h * acc;
+    let (mut s0, mut s1) = (0.0, 0.0);
+    for (&aj, k) in a.iter().zip(ks) {
+        s0 += aj * k[0];
+        s1 += aj * k[1];
     }
-    out
+    [y[0] + h * s0, y[1] + h * s1]
 }
 
 /// One DOP853 step of size `h` from `(t, y)` with slope `k1`. The error is Hairer's
