@@ -20,19 +20,35 @@
 //!   Math. 6 (1980) 19-26) with the PI step control and the 4th-order continuous extension of
 //!   Hairer, Norsett & Wanner, *Solving ODEs I*, II.5-II.6 (`DOPRI5`). The error of a step is
 //!   `sqrt(mean((err_i / (atol + rtol max(|y_i|, |y_new_i|)))^2))` on the scaled state.
+//! * [`Method::Dop853`]: Dormand-Prince 8(5,3) (Hairer's `DOP853`, *Solving ODEs I*, II.10)
+//!   with its 7th-order continuous extension; fewer force evaluations at tight tolerances.
+//! * [`Method::Rodas4`]: the L-stable Rosenbrock method of order 4(3) of Hairer & Wanner,
+//!   *Solving ODEs II*, IV.7 (`RODAS`), on the exact 2 x 2 Jacobian of the scaled equation
+//!   ([`ForceLaw::force_gradient`]), with a 3rd-order continuous output.
+//! * [`Method::Auto`]: Dop853 where the contact is not stiff, Rodas4 where it is (the step
+//!   times the Jacobian's spectral radius).
 //! * [`Method::Rk4`]: classical fixed-step Runge-Kutta 4 with `N` steps per Hertz contact
 //!   time, graded near the two ends of the contact (see [`Method::Rk4`]).
 //!
+//! Dopri5 scales a component's error by `atol + rtol max(|y_i|, |y_new_i|)`. Dop853, Rodas4
+//! and Auto use `rtol m + atol min(1, max(m, floor))` (`m = max(|y_i|, |y_new_i|)`, the floor
+//! the largest penetration so far for `x`, 0 for `v`): the speed keeps relative accuracy when
+//! it is small (a heavily damped contact creeps out at 1e-5 to 1e-4 u, where Dopri5's
+//! absolute part puts `t_c` off by 1e-5 to 2e-4 at 1e-9), and the penetration is held
+//! relative to the contact's own size. Dopri5 keeps its norm so that its results, and the
+//! streams made with it, stay as they were.
+//!
 //! # Events
-//! Each accepted step is searched on its continuous output (Dopri5's 4th-order extension,
-//! RK4's cubic Hermite, both quartics in the step fraction `theta`) for every sign change of
+//! Each accepted step is searched on its continuous output (a polynomial in the step
+//! fraction `theta` of the method's degree: Dopri5's 4th-order extension and RK4's cubic
+//! Hermite as quartics, Dop853's of degree 7, Rodas4's cubic) for every sign change of
 //! three switching functions: the contact end (`x`), for the Adams law the kink `delta = d`
 //! (`x - d / delta_max`) and for the damped laws the clamp at zero
 //! ([`ForceLaw::clamp_switch`], the unclamped force divided by a positive factor; the Adams law
 //! switches off before separation and on again just before it, when `k delta^1.5` outgrows
 //! the STEP-ramped damping). The search (`events.rs`) halves the step and drops a part
-//! only where an enclosure (Bernstein coefficients of the quartic, or
-//! [`ForceLaw::clamp_switch_bounds`] over the box of states the quartics take) proves no sign
+//! only where an enclosure (Bernstein coefficients of the polynomial, or
+//! [`ForceLaw::clamp_switch_bounds`] over the box of states the polynomials take) proves no sign
 //! change, so a switch inside a step is not stepped over, and it takes the earliest root
 //! (Illinois regula falsi on its bracket). The step is then re-taken exactly to the root (and
 //! must pass the error test) and, for the end and the kink, a last Newton correction lands on
@@ -58,15 +74,19 @@
 //! The damped laws with large damping (for example Adams with `c_max` a percent of `k` in SI)
 //! make the equation stiff: `c/m` times the contact time reaches 1e4. An explicit method then
 //! needs step sizes set by stability, not accuracy; the work is reported, not hidden
-//! ([`WorkStats`]).
+//! ([`WorkStats`]). Rodas4 is not held by stability, and [`Method::Auto`] uses it where the
+//! explicit step would be. The sphere then creeps out along the clamp (the unclamped force
+//! within rounding of zero for hundreds of steps); there the new methods' clamp search is
+//! bounded per step (`control::CLAMP_SPLITS`).
 //!
 //! # Layout
-//! One concept per file: `rhs` (the scaled equation of motion), `dopri5` and `rk4` (the
-//! methods' steps), `dense` (a step's continuous output), `control` (the step-size
-//! controller), `switching` (the event search of a step), `run` (the driver of one contact),
+//! One concept per file: `rhs` (the scaled equation of motion and its Jacobian), `dopri5`,
+//! `dop853`, `rodas4` and `rk4` (the methods' tableaus and steps), `dense` (a step's
+//! continuous output), `control` (the step-size controller, the error scale and Auto's
+//! choice), `switching` (the event search of a step), `run` (the driver of one contact),
 //! `peak` (the post-processing: largest penetration, peak force, pulse end) and `solution`
 //! (the result). The root finders and polynomial enclosures are in
-//! [`crate::physics::events`].
+//! `physics::events`.
 
 use serde::{Deserialize, Serialize};
 
