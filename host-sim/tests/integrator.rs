@@ -830,3 +830,66 @@ fn spec_and_report_are_serializable() {
     serializable(&spec);
     serializable(&simulate(&spec).expect("simulates"));
 }
+
+/// `ForceLaw::force_gradient` (Rodas4's Jacobian) against central differences of
+/// `ForceLaw::force`, for every law on both sides of the Adams ramp's end, while loading and
+/// unloading, and 0 where the clamp holds the force at zero.
+#[test]
+fn force_gradient_matches_finite_differences() {
+    let h = paper();
+    let k = h.stiffness;
+    // Yields at about 5e-5 m, inside the penetrations checked.
+    let thornton = host_sim::thornton::ThorntonContact {
+        stiffness: k,
+        radius_m: 0.03,
+        yield_pressure_pa: 1.5e8,
+        chi: 0.2,
+        impact_speed_m_s: 1.0,
+        unloading: None,
+    };
+    let laws = [
+        ForceLaw::Hertz {
+            stiffness: k,
+            exponent: 1.5,
+        },
+        ForceLaw::AdamsImpact {
+            stiffness: k,
+            exponent: 1.5,
+            c_max_n_s_m: 5000.0,
+            d_m: 5e-5,
+        },
+        ForceLaw::restitution_law(RestitutionModel::Flores, k, 1.5, 0.5, 1.0).expect("valid"),
+        ForceLaw::tsuji(k, h.mass_kg, 0.5).expect("valid"),
+        ForceLaw::Thornton(thornton),
+        ForceLaw::Thornton(thornton).turned_at(1e-4),
+    ];
+    let mut checked = 0;
+    for law in laws {
+        for delta in [2e-5, 4e-5, 8e-5, 1.1e-4] {
+            for rate in [0.8, 0.1, -0.05, -0.3] {
+                let f = law.force(delta, rate);
+                let (gd, gv) = law.force_gradient(delta, rate);
+                if f == 0.0 {
+                    assert_eq!((gd, gv), (0.0, 0.0), "{law:?} clamped at {delta}, {rate}");
+                    continue;
+                }
+                let (hd, hv) = (1e-6 * delta, 1e-6);
+                let fd = (law.force(delta + hd, rate) - law.force(delta - hd, rate)) / (2.0 * hd);
+                let fv = (law.force(delta, rate + hv) - law.force(delta, rate - hv)) / (2.0 * hv);
+                let scale_d = fd.abs().max(k * delta.sqrt() * 1e-6);
+                let scale_v = fv.abs().max(f / rate.abs() * 1e-6);
+                assert!(
+                    (gd - fd).abs() <= 1e-5 * scale_d,
+                    "{law:?} d/ddelta {gd} vs {fd}"
+                );
+                assert!(
+                    (gv - fv).abs() <= 1e-5 * scale_v,
+                    "{law:?} d/drate {gv} vs {fv}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    eprintln!("{checked} gradients checked");
+    assert!(checked >= 40, "{checked}");
+}
