@@ -1,7 +1,8 @@
 //! Impacts per second of the contact integrator on the paper scene (coal, R = 0.03 m, on
-//! carbon steel at 1 m/s): Dormand-Prince 5(4) at rtol = atol = 1e-3 ... 1e-12 and RK4 at
-//! 20 / 50 / 200 steps per contact time, undamped Hertz and Adams IMPACT (c_max for
-//! e = 0.5, d = 0.01 mm).
+//! carbon steel at 1 m/s): Dormand-Prince 5(4) at rtol = atol = 1e-3 ... 1e-12, Dop853,
+//! Rodas4 and Auto at 1e-6, 1e-9 and 1e-12, and RK4 at 20 / 50 / 200 steps per contact time,
+//! undamped Hertz and Adams IMPACT (c_max for e = 0.5, d = 0.01 mm); and the ode_solvers
+//! crate's Dop853 on the undamped contact at 1e-6, 1e-9 and 1e-12.
 //!
 //! Before timing, an accuracy table is printed (markdown): relative error of F_max and t_c
 //! against the closed forms (undamped) or against Dopri5 at rtol 1e-13 (Adams), and the work
@@ -12,8 +13,11 @@ use std::hint::black_box;
 use criterion::{Criterion, Throughput};
 use host_sim::hertz64::HertzImpact64;
 use host_sim::integrate::{ContactProblem, Limits, Method, SimError, Tolerance, integrate_contact};
-use host_sim::integrator_cases::{PaperProblems, bench_ladder, paper_problems, relative_errors};
+use host_sim::integrator_cases::{
+    BENCH_NEW_TOLERANCES, PaperProblems, bench_ladder, paper_problems, relative_errors,
+};
 use host_sim::laws::ForceLaw;
+use host_sim::report::ode_solvers_ref::dop853_hertz;
 
 fn accuracy_table(
     hertz: &HertzImpact64,
@@ -67,6 +71,7 @@ fn main() {
         hertz,
         undamped,
         adams,
+        ..
     } = match paper_problems() {
         Ok(s) => s,
         Err(e) => {
@@ -89,5 +94,15 @@ fn main() {
         }
         group.finish();
     }
+    // The same undamped contact integrated by the ode_solvers crate's Dop853 (no event
+    // location; see host_sim::report::ode_solvers_ref).
+    let mut group = crit.benchmark_group("undamped");
+    group.throughput(Throughput::Elements(1));
+    for tol in BENCH_NEW_TOLERANCES {
+        group.bench_function(format!("ode_solvers dop853 rtol {tol:.0e}"), |b| {
+            b.iter(|| dop853_hertz(black_box(tol)))
+        });
+    }
+    group.finish();
     crit.final_summary();
 }

@@ -3,6 +3,7 @@
 
 pub mod export;
 pub mod impact_row;
+pub mod ode_solvers_ref;
 pub mod paper;
 pub mod plasticity;
 pub mod speed;

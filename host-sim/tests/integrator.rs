@@ -499,18 +499,119 @@ fn agrees_with_ode_solvers_dop853() {
             speed_m_s: 1.0,
             gravity_m_s2: 0.0,
         };
-        let s = run(&p, Method::Dopri5, 1e-12);
-        let errs = [
-            rel(s.t_delta_max_s, t_max),
-            rel(s.delta_max_m, d_max),
-            rel(s.duration_s, t_c),
-            rel(s.rebound_speed_m_s, rebound),
-        ];
+        for method in [Method::Dopri5, Method::Dop853, Method::Rodas4, Method::Auto] {
+            let s = run(&p, method, 1e-12);
+            let errs = [
+                rel(s.t_delta_max_s, t_max),
+                rel(s.delta_max_m, d_max),
+                rel(s.duration_s, t_c),
+                rel(s.rebound_speed_m_s, rebound),
+            ];
+            eprintln!(
+                "{method:?} vs Dop853 ({law:?}): t_delta_max {:.1e}, delta_max {:.1e}, t_c \
+                 {:.1e}, rebound {:.1e}",
+                errs[0], errs[1], errs[2], errs[3]
+            );
+            assert!(errs.iter().all(|&e| e <= 1e-9), "{method:?}: {errs:?}");
+        }
+    }
+}
+
+/// Every adaptive method against the undamped Hertz closed forms on the paper scene: the
+/// error falls with the tolerance (at most 2e-9 at rtol 1e-9, 2e-11 at 1e-12), and Dop853
+/// needs fewer force evaluations than Dopri5 at 1e-12.
+#[test]
+fn new_methods_match_the_closed_forms() {
+    let h = paper();
+    let p = hertz_problem(&h, 0.0);
+    let mut evals = Vec::new();
+    for method in [Method::Dopri5, Method::Dop853, Method::Rodas4, Method::Auto] {
+        for (tol, bound) in [(1e-9, 2e-9), (1e-12, 2e-11)] {
+            let s = run(&p, method, tol);
+            let errs = [
+                rel(s.peak_force_n, h.peak_force_n),
+                rel(s.duration_s, h.duration_s),
+                rel(s.delta_max_m, h.delta_max_m),
+                rel(s.rebound_speed_m_s, 1.0),
+            ];
+            eprintln!(
+                "{method:?} rtol {tol:.0e}: F {:.1e}, t_c {:.1e}, delta_max {:.1e}, rebound \
+                 {:.1e}; {} force evals, {} Jacobians",
+                errs[0], errs[1], errs[2], errs[3], s.work.force_evals, s.work.jacobian_evals
+            );
+            assert!(
+                errs.iter().all(|&e| e <= bound),
+                "{method:?} {tol}: {errs:?}"
+            );
+            if tol == 1e-12 {
+                evals.push(s.work.force_evals);
+            }
+        }
+    }
+    assert!(
+        evals[1] < evals[0],
+        "Dop853 {} vs Dopri5 {}",
+        evals[1],
+        evals[0]
+    );
+}
+
+/// Heavily damped Adams contact (c_max 0.1 % and 1 % of k in SI units, d = 0.01 mm, e about
+/// 1e-4 and 2e-5): [`Method::Auto`] at rtol 1e-9 against Dop853 and Rodas4 at rtol 1e-12
+/// (two methods that share no step code with each other): delta_max, F_max, t_c and the
+/// rebound within 1e-8, and far less work than Dopri5 at 1e-9, whose absolute tolerance lets
+/// the creep's speed and the contact time drift (t_c off by 1e-5 and more).
+#[test]
+fn heavy_damping_auto_is_accurate_and_cheaper() {
+    let h = paper();
+    for frac in [0.001, 0.01] {
+        let p = ContactProblem {
+            law: ForceLaw::AdamsImpact {
+                stiffness: h.stiffness,
+                exponent: 1.5,
+                c_max_n_s_m: frac * h.stiffness,
+                d_m: 1e-5,
+            },
+            mass_kg: h.mass_kg,
+            speed_m_s: 1.0,
+            gravity_m_s2: 0.0,
+        };
+        let outputs = |s: &ContactSolution| {
+            [
+                s.delta_max_m,
+                s.peak_force_n,
+                s.duration_s,
+                s.rebound_speed_m_s,
+            ]
+        };
+        let refs = [Method::Dop853, Method::Rodas4].map(|m| outputs(&run(&p, m, 1e-12)));
+        for (a, b) in refs[0].iter().zip(&refs[1]) {
+            assert!(rel(*a, *b) <= 1e-9, "references disagree: {refs:?}");
+        }
+        let auto = run(&p, Method::Auto, 1e-9);
+        let errs: Vec<f64> = outputs(&auto)
+            .iter()
+            .zip(&refs[0])
+            .map(|(a, b)| rel(*a, *b))
+            .collect();
+        let dopri = run(&p, Method::Dopri5, 1e-9);
+        let work = auto.work.force_evals + auto.work.jacobian_evals;
         eprintln!(
-            "vs Dop853 ({law:?}): t_delta_max {:.1e}, delta_max {:.1e}, t_c {:.1e}, rebound {:.1e}",
-            errs[0], errs[1], errs[2], errs[3]
+            "c_max {frac} k: e {:.2e}; Auto 1e-9 errors (delta_max, F, t_c, rebound) {errs:?}, \
+             work {work} ({} Rodas4 steps of {}); Dopri5 1e-9 t_c error {:.1e}, {} force evals",
+            auto.restitution(),
+            auto.work.stiff_steps,
+            auto.work.steps,
+            rel(dopri.duration_s, refs[0][2]),
+            dopri.work.force_evals
         );
-        assert!(errs.iter().all(|&e| e <= 1e-9), "{errs:?}");
+        assert!(errs.iter().all(|&e| e <= 1e-8), "{errs:?}");
+        assert!(auto.work.stiff_steps > 0);
+        assert!(
+            3 * work < dopri.work.force_evals,
+            "{work} vs {}",
+            dopri.work.force_evals
+        );
     }
 }
 
@@ -728,4 +829,67 @@ fn spec_and_report_are_serializable() {
     let spec = ImpactSpec::paper_scene();
     serializable(&spec);
     serializable(&simulate(&spec).expect("simulates"));
+}
+
+/// `ForceLaw::force_gradient` (Rodas4's Jacobian) against central differences of
+/// `ForceLaw::force`, for every law on both sides of the Adams ramp's end, while loading and
+/// unloading, and 0 where the clamp holds the force at zero.
+#[test]
+fn force_gradient_matches_finite_differences() {
+    let h = paper();
+    let k = h.stiffness;
+    // Yields at about 5e-5 m, inside the penetrations checked.
+    let thornton = host_sim::thornton::ThorntonContact {
+        stiffness: k,
+        radius_m: 0.03,
+        yield_pressure_pa: 1.5e8,
+        chi: 0.2,
+        impact_speed_m_s: 1.0,
+        unloading: None,
+    };
+    let laws = [
+        ForceLaw::Hertz {
+            stiffness: k,
+            exponent: 1.5,
+        },
+        ForceLaw::AdamsImpact {
+            stiffness: k,
+            exponent: 1.5,
+            c_max_n_s_m: 5000.0,
+            d_m: 5e-5,
+        },
+        ForceLaw::restitution_law(RestitutionModel::Flores, k, 1.5, 0.5, 1.0).expect("valid"),
+        ForceLaw::tsuji(k, h.mass_kg, 0.5).expect("valid"),
+        ForceLaw::Thornton(thornton),
+        ForceLaw::Thornton(thornton).turned_at(1e-4),
+    ];
+    let mut checked = 0;
+    for law in laws {
+        for delta in [2e-5, 4e-5, 8e-5, 1.1e-4] {
+            for rate in [0.8, 0.1, -0.05, -0.3] {
+                let f = law.force(delta, rate);
+                let (gd, gv) = law.force_gradient(delta, rate);
+                if f == 0.0 {
+                    assert_eq!((gd, gv), (0.0, 0.0), "{law:?} clamped at {delta}, {rate}");
+                    continue;
+                }
+                let (hd, hv) = (1e-6 * delta, 1e-6);
+                let fd = (law.force(delta + hd, rate) - law.force(delta - hd, rate)) / (2.0 * hd);
+                let fv = (law.force(delta, rate + hv) - law.force(delta, rate - hv)) / (2.0 * hv);
+                let scale_d = fd.abs().max(k * delta.sqrt() * 1e-6);
+                let scale_v = fv.abs().max(f / rate.abs() * 1e-6);
+                assert!(
+                    (gd - fd).abs() <= 1e-5 * scale_d,
+                    "{law:?} d/ddelta {gd} vs {fd}"
+                );
+                assert!(
+                    (gv - fv).abs() <= 1e-5 * scale_v,
+                    "{law:?} d/drate {gv} vs {fv}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    eprintln!("{checked} gradients checked");
+    assert!(checked >= 40, "{checked}");
 }

@@ -17,7 +17,7 @@
 //! | `c_max` | Adams full damping `c_max` (N s/m); for `adams` give it or `restitution` |
 //! | `depth` | Adams penetration `d` (m) over which the damping ramps up (default 1e-5) |
 //! | `method` | [`MethodName`] (default `dopri5`) |
-//! | `tol` | Dormand-Prince `rtol = atol` on the state scaled by the Hertz `delta_max` and by `u` (default 1e-9) |
+//! | `tol` | `rtol = atol` of the adaptive methods on the state scaled by the Hertz `delta_max` and by `u` (default 1e-9) |
 //! | `steps_per_tc` | RK4 steps per Hertz contact time (default 200) |
 //! | `gravity` | acceleration (m/s^2) pushing the sphere into the plate during the contact (default 0; 9.80665 is standard gravity) |
 //!
@@ -130,10 +130,14 @@ pub struct ImpactArgs {
     /// [default: 1e-5].
     #[arg(long, allow_negative_numbers = true)]
     pub depth: Option<f64>,
-    /// Integration method.
+    /// Integration method: dopri5 (Dormand-Prince 5(4), the default), dop853 (Dormand-Prince
+    /// 8(5,3), cheaper at tolerances of 1e-9 and below), rodas4 (Rosenbrock on the exact
+    /// Jacobian, for heavily damped, stiff contacts), auto (dop853, switching to rodas4 where
+    /// the contact is stiff) or rk4 (fixed steps). The adaptive methods but dopri5 hold the
+    /// rebound and creep speeds to relative accuracy.
     #[arg(long, value_enum, default_value_t = MethodName::Dopri5)]
     pub method: MethodName,
-    /// Dormand-Prince relative and absolute tolerance (dopri5 only), on the state scaled by
+    /// Relative and absolute tolerance of the adaptive methods (all but rk4), on the state scaled by
     /// the Hertz closed forms: penetration in units of delta_max, velocity in units of the
     /// approach speed u; from 1e-14 to below 1 [default: 1e-9].
     #[arg(long, allow_negative_numbers = true)]

@@ -1,14 +1,14 @@
 //! Root location on a step's continuous output: the earliest sign change of a switching
 //! function inside a step, found so that none is stepped over.
 //!
-//! A step's continuous output is a quartic in `theta` in [0, 1] for each component of the
-//! scaled state ([`Quartic`]). [`earliest_root`] halves `[a, b]` and drops a half only when an
+//! A step's continuous output is a polynomial in `theta` in [0, 1] for each component of the
+//! scaled state ([`Poly`], of the degree of the method's continuous output: 3 to 7). [`earliest_root`] halves `[a, b]` and drops a half only when an
 //! enclosure proves that the function has no sign change there ([`Enclosure`]): for a
 //! polynomial switching function (contact end `x`, Adams kink `x - x_d`) its Bernstein
-//! coefficients on the half (the quartic lies in their convex hull; with non-zero end
+//! coefficients on the half (the polynomial lies in their convex hull; with non-zero end
 //! coefficients, at most one sign variation means at most one root inside, by Descartes' rule
 //! for the Bernstein basis, so no further halving is needed), for the clamp a bound of the
-//! law's switching function over the box of states that the quartics take on the half. Left
+//! law's switching function over the box of states that the polynomials take on the half. Left
 //! halves are searched first, so the first root found is the earliest. A half narrower than
 //! `2^-MAX_DEPTH` of the interval is not split further; its bracket, if any, is refined by
 //! Illinois regula falsi.
@@ -16,52 +16,87 @@
 /// Halvings of the searched interval before a bracket is refined as it is.
 const MAX_DEPTH: u32 = 30;
 
-/// A quartic `c0 + c1 theta + c2 theta^2 + c3 theta^3 + c4 theta^4` (power basis).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Quartic(pub [f64; 5]);
+/// Most coefficients of a [`Poly`]: degree 7 (Dop853's continuous output).
+pub(crate) const MAX_COEFFS: usize = 8;
 
-impl Quartic {
+/// A polynomial `c0 + c1 theta + ... + c_deg theta^deg` (power basis) of degree at most 7:
+/// a component of a step's continuous output (cubic for Rodas4, quartic for Dopri5 and RK4's
+/// Hermite interpolant padded with a zero, degree 7 for Dop853).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Poly {
+    /// Coefficients `c_0 ..= c_deg`; the rest are 0.
+    pub c: [f64; MAX_COEFFS],
+    /// Degree (at most 7).
+    pub deg: usize,
+}
+
+impl Poly {
+    /// The quartic `c0 + ... + c4 theta^4`.
+    pub fn quartic(c: [f64; 5]) -> Self {
+        let mut out = [0.0; MAX_COEFFS];
+        out[..5].copy_from_slice(&c);
+        Self { c: out, deg: 4 }
+    }
+
     /// Value at `theta` (Horner).
     pub fn eval(&self, theta: f64) -> f64 {
-        let c = &self.0;
-        c[0] + theta * (c[1] + theta * (c[2] + theta * (c[3] + theta * c[4])))
+        let mut acc = self.c[self.deg];
+        for &ci in self.c[..self.deg].iter().rev() {
+            acc = ci + theta * acc;
+        }
+        acc
     }
 
-    /// The quartic minus the constant `x`.
+    /// The polynomial minus the constant `x`.
     pub fn minus(&self, x: f64) -> Self {
-        let mut c = self.0;
-        c[0] -= x;
-        Self(c)
+        let mut p = *self;
+        p.c[0] -= x;
+        p
     }
 
-    /// Bernstein coefficients of the quartic restricted to `[a, b]`: Taylor shift to `a`
-    /// (`q_j = p^(j)(a) (b - a)^j / j!`), then `b_i = sum_j C(i, j) / C(4, j) q_j`.
-    pub fn bernstein(&self, a: f64, b: f64) -> [f64; 5] {
-        let mut q = self.0;
-        for i in 0..4 {
-            for j in (i..4).rev() {
+    /// Bernstein coefficients `b_0 ..= b_deg` of the polynomial restricted to `[a, b]`
+    /// (the rest 0): Taylor shift to `a` (`q_j = p^(j)(a) (b - a)^j / j!`), then
+    /// `b_i = sum_(j <= i) C(i, j) / C(deg, j) q_j`.
+    pub fn bernstein(&self, a: f64, b: f64) -> [f64; MAX_COEFFS] {
+        let n = self.deg;
+        let mut q = self.c;
+        for i in 0..n {
+            for j in (i..n).rev() {
                 q[j] += a * q[j + 1];
             }
         }
         let w = b - a;
         let mut wj = w;
-        for qj in q.iter_mut().skip(1) {
+        for qj in q.iter_mut().take(n + 1).skip(1) {
             *qj *= wj;
             wj *= w;
         }
-        [
-            q[0],
-            q[0] + 0.25 * q[1],
-            q[0] + 0.5 * q[1] + q[2] / 6.0,
-            q[0] + 0.75 * q[1] + 0.5 * q[2] + 0.25 * q[3],
-            q[0] + q[1] + q[2] + q[3] + q[4],
-        ]
+        let mut out = [0.0; MAX_COEFFS];
+        if n == 4 {
+            // The quartic's weights written out (Dopri5's and RK4's events depend on these
+            // roundings bit for bit).
+            out[..5].copy_from_slice(&[
+                q[0],
+                q[0] + 0.25 * q[1],
+                q[0] + 0.5 * q[1] + q[2] / 6.0,
+                q[0] + 0.75 * q[1] + 0.5 * q[2] + 0.25 * q[3],
+                q[0] + q[1] + q[2] + q[3] + q[4],
+            ]);
+            return out;
+        }
+        let weights = &BERNSTEIN_WEIGHTS[n];
+        for (bi, wi) in out.iter_mut().zip(weights).take(n + 1) {
+            *bi = wi[..=n].iter().zip(&q).map(|(w, qj)| w * qj).sum();
+        }
+        out
     }
 
-    /// Bounds `(lo, hi)` of the quartic on `[a, b]` (the hull of its Bernstein coefficients).
+    /// Bounds `(lo, hi)` of the polynomial on `[a, b]` (the hull of its Bernstein
+    /// coefficients).
     pub fn range(&self, a: f64, b: f64) -> (f64, f64) {
         let bs = self.bernstein(a, b);
-        bs.iter()
+        bs[..=self.deg]
+            .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
                 (lo.min(x), hi.max(x))
             })
@@ -69,11 +104,12 @@ impl Quartic {
 
     /// What the Bernstein coefficients on `[a, b]` say about the roots there.
     pub fn enclosure(&self, a: f64, b: f64) -> Enclosure {
-        let bs = self.bernstein(a, b);
+        let all = self.bernstein(a, b);
+        let bs = &all[..=self.deg];
         if bs.iter().all(|&x| x > 0.0) || bs.iter().all(|&x| x < 0.0) {
             return Enclosure::NoRoot;
         }
-        if bs[0] == 0.0 || bs[4] == 0.0 {
+        if bs[0] == 0.0 || bs[self.deg] == 0.0 {
             // A root at an end: the count below is for the open interval only.
             return Enclosure::Unknown;
         }
@@ -90,6 +126,40 @@ impl Quartic {
         }
     }
 }
+
+/// The binomial coefficient `C(n, k)` as f64 (exact for `n <= 7`; 0 for `k > n`).
+const fn binomial(n: usize, k: usize) -> f64 {
+    if k > n {
+        return 0.0;
+    }
+    let mut acc = 1.0;
+    let mut i = 0;
+    while i < k {
+        acc = acc * (n - i) as f64 / (i + 1) as f64;
+        i += 1;
+    }
+    acc
+}
+
+/// `BERNSTEIN_WEIGHTS[n][i][j] = C(i, j) / C(n, j)` (0 for `j > i`): the weights that turn
+/// the scaled Taylor coefficients of a degree-`n` polynomial into its Bernstein coefficients.
+const BERNSTEIN_WEIGHTS: [[[f64; MAX_COEFFS]; MAX_COEFFS]; MAX_COEFFS] = {
+    let mut w = [[[0.0; MAX_COEFFS]; MAX_COEFFS]; MAX_COEFFS];
+    let mut n = 0;
+    while n < MAX_COEFFS {
+        let mut i = 0;
+        while i <= n {
+            let mut j = 0;
+            while j <= i {
+                w[n][i][j] = binomial(i, j) / binomial(n, j);
+                j += 1;
+            }
+            i += 1;
+        }
+        n += 1;
+    }
+    w
+};
 
 /// What is known about the roots of a switching function on an interval.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,10 +181,25 @@ pub(crate) fn earliest_root(
     a: f64,
     b: f64,
 ) -> Option<f64> {
+    earliest_root_within(g, enclose, a, b, usize::MAX)
+}
+
+/// [`earliest_root`] with at most `max_splits` halvings in all: once they are spent, a part
+/// that no enclosure has settled is searched only for a sign change between its ends (as at
+/// the depth limit). A function that hovers at zero over the whole interval (a law sliding
+/// along its clamp) would otherwise cost up to `2^MAX_DEPTH` halvings.
+pub(crate) fn earliest_root_within(
+    g: &dyn Fn(f64) -> f64,
+    enclose: &dyn Fn(f64, f64) -> Enclosure,
+    a: f64,
+    b: f64,
+    max_splits: usize,
+) -> Option<f64> {
     if b <= a || b.is_nan() {
         return None;
     }
-    search(g, enclose, (a, g(a)), (b, g(b)), MAX_DEPTH)
+    let splits = core::cell::Cell::new(max_splits);
+    search(g, enclose, (a, g(a)), (b, g(b)), MAX_DEPTH, &splits)
 }
 
 fn search(
@@ -123,17 +208,21 @@ fn search(
     (a, ga): (f64, f64),
     (b, gb): (f64, f64),
     depth: u32,
+    splits: &core::cell::Cell<usize>,
 ) -> Option<f64> {
     let crossing = ga != 0.0 && ga * gb <= 0.0;
     match enclose(a, b) {
         Enclosure::NoRoot => None,
         Enclosure::AtMostOne => crossing.then(|| illinois(g, a, ga, b, gb)),
-        Enclosure::Unknown if depth == 0 => crossing.then(|| illinois(g, a, ga, b, gb)),
+        Enclosure::Unknown if depth == 0 || splits.get() == 0 => {
+            crossing.then(|| illinois(g, a, ga, b, gb))
+        }
         Enclosure::Unknown => {
+            splits.set(splits.get() - 1);
             let m = 0.5 * (a + b);
             let gm = g(m);
-            search(g, enclose, (a, ga), (m, gm), depth - 1)
-                .or_else(|| search(g, enclose, (m, gm), (b, gb), depth - 1))
+            search(g, enclose, (a, ga), (m, gm), depth - 1, splits)
+                .or_else(|| search(g, enclose, (m, gm), (b, gb), depth - 1, splits))
         }
     }
 }
@@ -212,7 +301,7 @@ mod tests {
             }
             c = n;
         }
-        let p = Quartic(c);
+        let p = Poly::quartic(c);
         let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.0, 1.0);
         assert!((th.expect("a root") - 0.2).abs() < 1e-14);
         // A pair of roots inside with no sign change between the ends is not stepped over.
@@ -261,5 +350,37 @@ mod tests {
             0.0,
         );
         assert!(failed.is_err());
+    }
+
+    /// A degree-7 polynomial (Dop853's output degree) with roots 0.3, 0.31, 0.32 and four
+    /// outside [0, 1]: the earliest root is found from either end's sign, and the Bernstein
+    /// hull encloses every value.
+    #[test]
+    fn degree_seven_roots_and_hull() {
+        let roots = [0.3, 0.31, 0.32, -1.0, 1.5, 2.0, 3.0];
+        let mut c = [0.0; MAX_COEFFS];
+        c[0] = 1.0;
+        for (deg, r) in roots.iter().enumerate() {
+            let mut n = [0.0; MAX_COEFFS];
+            for i in 0..=deg + 1 {
+                n[i] = -r * c[i] + if i > 0 { c[i - 1] } else { 0.0 };
+            }
+            c = n;
+        }
+        let p = Poly { c, deg: 7 };
+        let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.0, 1.0);
+        assert!((th.expect("a root") - 0.3).abs() < 1e-11, "{th:?}");
+        let th = earliest_root(&|t| p.eval(t), &|a, b| p.enclosure(a, b), 0.305, 1.0);
+        assert!((th.expect("a root") - 0.31).abs() < 1e-11);
+        for (a, b) in [(0.0, 1.0), (0.25, 0.5)] {
+            let (lo, hi) = p.range(a, b);
+            for i in 0..=100 {
+                let v = p.eval(a + (b - a) * f64::from(i) / 100.0);
+                assert!(
+                    lo - 1e-15 <= v && v <= hi + 1e-15,
+                    "{v} outside [{lo}, {hi}]"
+                );
+            }
+        }
     }
 }

@@ -12,6 +12,9 @@ use crate::physics::laws::ForceLaw;
 /// Dormand-Prince tolerances (`rtol = atol`, on the scaled state) of the criterion bench.
 pub const BENCH_DOPRI5_TOLERANCES: [f64; 4] = [1e-3, 1e-6, 1e-9, 1e-12];
 
+/// Tolerances of Dop853, Rodas4 and Auto in the criterion bench and `host-sim speed`.
+pub const BENCH_NEW_TOLERANCES: [f64; 3] = [1e-6, 1e-9, 1e-12];
+
 /// RK4 steps per Hertz contact time of the criterion bench.
 pub const BENCH_RK4_STEPS: [u32; 3] = [20, 50, 200];
 
@@ -32,6 +35,22 @@ impl MethodCase {
         Self {
             label: format!("dopri5 rtol {tol:.0e}"),
             method: Method::Dopri5,
+            tol: Tolerance::new(tol),
+        }
+    }
+
+    /// An adaptive `method` at `rtol = atol = tol` (`"dop853 rtol 1e-9"`).
+    pub fn adaptive(method: Method, tol: f64) -> Self {
+        let name = match method {
+            Method::Dopri5 => "dopri5",
+            Method::Dop853 => "dop853",
+            Method::Rodas4 => "rodas4",
+            Method::Auto => "auto",
+            Method::Rk4 { .. } => "rk4",
+        };
+        Self {
+            label: format!("{name} rtol {tol:.0e}"),
+            method,
             tol: Tolerance::new(tol),
         }
     }
@@ -60,9 +79,29 @@ pub fn ladder(dopri5_tolerances: &[f64], rk4_steps: &[u32]) -> Vec<MethodCase> {
         .collect()
 }
 
-/// The criterion bench's ladder: [`BENCH_DOPRI5_TOLERANCES`] and [`BENCH_RK4_STEPS`].
+/// The criterion bench's ladder: Dopri5 at [`BENCH_DOPRI5_TOLERANCES`], Dop853, Rodas4 and
+/// Auto at [`BENCH_NEW_TOLERANCES`], RK4 at [`BENCH_RK4_STEPS`].
 pub fn bench_ladder() -> Vec<MethodCase> {
-    ladder(&BENCH_DOPRI5_TOLERANCES, &BENCH_RK4_STEPS)
+    let mut cases = ladder(&BENCH_DOPRI5_TOLERANCES, &[]);
+    for method in [Method::Dop853, Method::Rodas4, Method::Auto] {
+        cases.extend(
+            BENCH_NEW_TOLERANCES
+                .iter()
+                .map(|&t| MethodCase::adaptive(method, t)),
+        );
+    }
+    cases.extend(ladder(&[], &BENCH_RK4_STEPS));
+    cases
+}
+
+/// The ladder of the heavily damped contact ([`PaperProblems::heavy`]): Dopri5, Rodas4 and
+/// Auto at rtol 1e-6 and 1e-9 (Dop853 is held by stability there, at 40-50 x Auto's work).
+pub fn heavy_ladder() -> Vec<MethodCase> {
+    let mut cases = Vec::new();
+    for method in [Method::Dopri5, Method::Rodas4, Method::Auto] {
+        cases.extend([1e-6, 1e-9].map(|t| MethodCase::adaptive(method, t)));
+    }
+    cases
 }
 
 /// The undamped Hertz contact `F = k delta^1.5` of an impact's closed forms, without gravity.
@@ -88,6 +127,9 @@ pub struct PaperProblems {
     pub undamped: ContactProblem,
     /// Adams IMPACT with `d` = 0.01 mm and the `c_max` that gives `e` = 0.5 at this speed.
     pub adams: ContactProblem,
+    /// Heavily damped Adams IMPACT: `d` = 0.01 mm, `c_max` = 1 % of `k` in SI units
+    /// (`e` about 2.2e-5; stiff: `c_max / m` times the contact time is about 3e4).
+    pub heavy: ContactProblem,
 }
 
 /// [`PaperProblems`]; errors only if the restitution search fails.
@@ -106,10 +148,20 @@ pub fn paper_problems() -> Result<PaperProblems, SimError> {
         law: adams_law,
         ..undamped
     };
+    let heavy = ContactProblem {
+        law: ForceLaw::AdamsImpact {
+            stiffness: hertz.stiffness,
+            exponent: 1.5,
+            c_max_n_s_m: 0.01 * hertz.stiffness,
+            d_m: 1e-5,
+        },
+        ..undamped
+    };
     Ok(PaperProblems {
         hertz,
         undamped,
         adams,
+        heavy,
     })
 }
 

@@ -224,6 +224,82 @@ impl ForceLaw {
         }
     }
 
+    /// The gradient `(dF/ddelta in N/m, dF/ddelta_dot in N s/m)` of [`ForceLaw::force`] at
+    /// `delta_m` (m) and `delta_dot_m_s` (m/s), exact: `(0, 0)` for `delta_m <= 0` and where
+    /// the clamp holds the force at zero (unclamped force `G < 0`); else the gradient of `G`:
+    /// * Hertz: `(n k delta^(n-1), 0)`;
+    /// * Adams: `(e k delta^(e-1) + STEP'(delta) delta_dot, STEP(delta))` with
+    ///   `STEP'(delta) = 6 c_max s (1 - s) / d`, `s = delta / d`, below `d` (0 above);
+    /// * restitution laws: `(n K delta^(n-1) (1 + chi delta_dot / u0), K delta^n chi / u0)`;
+    /// * Tsuji: `(1.5 k delta^(1/2) + c0 delta_dot / (4 delta^(3/4)), c0 delta^(1/4))` with
+    ///   `c0 = -2 sqrt(5/6) beta sqrt(1.5 k m)`;
+    /// * Thornton: `(F_ep' (1 + chi delta_dot / u), F_ep chi / u)`.
+    pub fn force_gradient(&self, delta_m: f64, delta_dot_m_s: f64) -> (f64, f64) {
+        if delta_m <= 0.0
+            || (self.is_clamped() && self.unclamped_force(delta_m, delta_dot_m_s) < 0.0)
+        {
+            return (0.0, 0.0);
+        }
+        let pow_slope = |k: f64, n: f64| {
+            if n == 1.5 {
+                1.5 * k * delta_m.sqrt()
+            } else {
+                n * k * delta_m.powf(n - 1.0)
+            }
+        };
+        match *self {
+            Self::Hertz {
+                stiffness,
+                exponent,
+            } => (pow_slope(stiffness, exponent), 0.0),
+            Self::AdamsImpact {
+                stiffness,
+                exponent,
+                c_max_n_s_m,
+                d_m,
+            } => {
+                let c = step_cubic(delta_m, 0.0, 0.0, d_m, c_max_n_s_m);
+                let dc = if delta_m < d_m {
+                    let s = delta_m / d_m;
+                    6.0 * c_max_n_s_m * s * (1.0 - s) / d_m
+                } else {
+                    0.0
+                };
+                (pow_slope(stiffness, exponent) + dc * delta_dot_m_s, c)
+            }
+            Self::Restitution {
+                stiffness,
+                exponent,
+                chi,
+                impact_speed_m_s,
+                ..
+            } => {
+                let factor = 1.0 + chi * delta_dot_m_s / impact_speed_m_s;
+                (
+                    pow_slope(stiffness, exponent) * factor,
+                    stiffness * pow_e(delta_m, exponent) * chi / impact_speed_m_s,
+                )
+            }
+            Self::Tsuji {
+                stiffness,
+                mass_kg,
+                beta,
+                ..
+            } => {
+                let c0 = -2.0 * (5.0_f64 / 6.0).sqrt() * beta * (1.5 * stiffness * mass_kg).sqrt();
+                let q = delta_m.sqrt().sqrt();
+                (
+                    1.5 * stiffness * delta_m.sqrt() + 0.25 * c0 * delta_dot_m_s / (q * q * q),
+                    c0 * q,
+                )
+            }
+            Self::Thornton(t) => (
+                t.elastic_plastic_slope_n_m(delta_m) * t.damping_factor(delta_dot_m_s),
+                t.elastic_plastic_force_n(delta_m) * t.chi / t.impact_speed_m_s,
+            ),
+        }
+    }
+
     /// The clamp's switching function `S(delta, delta_dot)`: the
     /// [`ForceLaw::unclamped_force`] `G` divided by a factor that is positive for `delta > 0`,
     /// chosen so that `S` stays finite as `delta -> 0+` (its limit is returned for

@@ -111,6 +111,26 @@ impl ThorntonContact {
         }
     }
 
+    /// The slope `dF/ddelta` in N/m of [`ThorntonContact::elastic_plastic_force_n`] at
+    /// `delta_m` (m): `1.5 k delta^(1/2)` on the Hertz part of the loading curve,
+    /// `pi p_y R` on its plastic part, `1.5 k_u (delta - delta_p)^(1/2)` on the unloading branch
+    /// (0 below `delta_p`); the slope from below at the curve's kinks.
+    pub fn elastic_plastic_slope_n_m(&self, delta_m: f64) -> f64 {
+        match self.unloading {
+            Some(u) if delta_m <= u.delta_max_m => {
+                let s = delta_m - u.residual_m;
+                if s > 0.0 {
+                    1.5 * u.stiffness * s.sqrt()
+                } else {
+                    0.0
+                }
+            }
+            _ if delta_m <= 0.0 => 0.0,
+            _ if delta_m <= self.yield_penetration_m() => 1.5 * self.stiffness * delta_m.sqrt(),
+            _ => self.plastic_slope_n_m(),
+        }
+    }
+
     /// The damping factor's switching function `1 + chi delta_dot / u` (dimensionless).
     pub fn damping_factor(&self, delta_dot_m_s: f64) -> f64 {
         1.0 + self.chi * delta_dot_m_s / self.impact_speed_m_s

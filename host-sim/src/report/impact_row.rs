@@ -159,20 +159,38 @@ impl LawName {
 /// Integration method (see [`crate::physics::integrate::Method`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MethodName {
-    /// Adaptive Dormand-Prince 5(4).
+    /// Adaptive Dormand-Prince 5(4) with tolerance `tol` (the default).
     Dopri5,
-    /// Fixed-step RK4.
+    /// Adaptive Dormand-Prince 8(5,3) with tolerance `tol`: fewer force evaluations at tight
+    /// tolerances (1e-9 and below).
+    Dop853,
+    /// Rodas4, a Rosenbrock method on the exact Jacobian, with tolerance `tol`: for heavily
+    /// damped (stiff) contacts.
+    Rodas4,
+    /// Dop853 where the contact is not stiff, Rodas4 where it is (chosen step by step from
+    /// the Jacobian), with tolerance `tol`.
+    Auto,
+    /// Fixed-step RK4 with `steps_per_tc` steps per Hertz contact time.
     Rk4,
 }
 
 impl MethodName {
     /// Every method, in the order the help lists them.
-    pub const ALL: [Self; 2] = [Self::Dopri5, Self::Rk4];
+    pub const ALL: [Self; 5] = [
+        Self::Dopri5,
+        Self::Dop853,
+        Self::Rodas4,
+        Self::Auto,
+        Self::Rk4,
+    ];
 
     /// The name as written on the command line and in CSV.
     pub fn as_str(self) -> &'static str {
         match self {
             Self::Dopri5 => "dopri5",
+            Self::Dop853 => "dop853",
+            Self::Rodas4 => "rodas4",
+            Self::Auto => "auto",
             Self::Rk4 => "rk4",
         }
     }
@@ -180,7 +198,16 @@ impl MethodName {
     /// The method and its input, as the help shows it.
     pub fn about(self) -> &'static str {
         match self {
-            Self::Dopri5 => "Adaptive Dormand-Prince 5(4) with tolerance `tol`",
+            Self::Dopri5 => "Adaptive Dormand-Prince 5(4) with tolerance `tol` (the default)",
+            Self::Dop853 => {
+                "Adaptive Dormand-Prince 8(5,3) with tolerance `tol`: fewer force evaluations at 1e-9 and below"
+            }
+            Self::Rodas4 => {
+                "Rodas4, a Rosenbrock method on the exact Jacobian, with tolerance `tol`: for heavily damped (stiff) contacts"
+            }
+            Self::Auto => {
+                "Dop853 where the contact is not stiff, Rodas4 where it is (chosen step by step), with tolerance `tol`"
+            }
             Self::Rk4 => "Fixed-step RK4 with `steps_per_tc` steps per Hertz contact time",
         }
     }
@@ -191,7 +218,9 @@ impl MethodName {
         Self::ALL
             .into_iter()
             .find(|m| m.as_str() == norm)
-            .ok_or_else(|| format!("unknown method {s:?}: expected dopri5 or rk4"))
+            .ok_or_else(|| {
+                format!("unknown method {s:?}: expected dopri5, dop853, rodas4, auto or rk4")
+            })
     }
 }
 
@@ -431,8 +460,8 @@ impl InputRow {
         }
         let method_who = format!("method {}", method.as_str());
         match method {
-            MethodName::Dopri5 => refuse("steps_per_tc", method_who, "only rk4 takes it"),
-            MethodName::Rk4 => refuse("tol", method_who, "only dopri5 takes it"),
+            MethodName::Rk4 => refuse("tol", method_who, "only the adaptive methods take it"),
+            _ => refuse("steps_per_tc", method_who, "only rk4 takes it"),
         }
     }
 
@@ -508,8 +537,15 @@ impl InputRow {
         spec: &mut ImpactSpec,
         echo: &mut InputRow,
     ) -> Result<(), String> {
-        match method {
-            MethodName::Dopri5 => {
+        let adaptive = match method {
+            MethodName::Dopri5 => Some(Method::Dopri5),
+            MethodName::Dop853 => Some(Method::Dop853),
+            MethodName::Rodas4 => Some(Method::Rodas4),
+            MethodName::Auto => Some(Method::Auto),
+            MethodName::Rk4 => None,
+        };
+        match adaptive {
+            Some(adaptive) => {
                 let tol = self.num("tol")?.unwrap_or(DEFAULT_TOL);
                 if !(MIN_TOL..1.0).contains(&tol) {
                     return Err(format!(
@@ -519,10 +555,10 @@ impl InputRow {
                     ));
                 }
                 echo.set_default("tol", "1e-9");
-                spec.method = Method::Dopri5;
+                spec.method = adaptive;
                 spec.tolerance = Tolerance::new(tol);
             }
-            MethodName::Rk4 => {
+            None => {
                 let steps = match self.get("steps_per_tc") {
                     "" => DEFAULT_STEPS_PER_TC,
                     s => s

@@ -1,12 +1,16 @@
 //! Speed figures of host-sim measured in one run on the machine it runs on (`host-sim speed`):
 //! the contact integrator's impacts per second on the paper's impact (undamped Hertz and
 //! Adams IMPACT with e = 0.5, d = 0.01 mm, c_max from the restitution; one thread) for every
-//! method and tolerance of the criterion bench's ladder, with its errors and work, and the
+//! method and tolerance of the criterion bench's ladder, with its errors and work (force and
+//! Jacobian evaluations), the `ode_solvers` crate's Dop853 on the same Hertz contact (and
+//! every method's throughput as a ratio to it at equal tolerance), the heavily damped Adams
+//! contact (c_max = 1 % of k in SI units) for Dopri5, Rodas4 and Auto, and the
 //! wall time of an end-to-end evaluation (`evaluate`: integrator, sensor chain, kernel,
 //! scoring) of N impacts of a scene on every core and, optionally, on one.
 //!
-//! Errors are relative to the Hertz closed forms (undamped) and to Dormand-Prince at
-//! rtol = atol = 1e-13 (Adams), as in `benches/integrator.rs`. Integrator throughput is the
+//! Errors are relative to the Hertz closed forms (undamped), to Dormand-Prince at
+//! rtol = atol = 1e-13 (Adams e = 0.5) and to Rodas4 at 1e-12 (heavy damping), as in
+//! `benches/integrator.rs`. Integrator throughput is the
 //! best of repeated batches of 100 integrations over the measuring time (the least disturbed
 //! batch on a shared machine); the evaluation is timed once. Ratios between figures of one run
 //! are what carries over between machines.
@@ -18,8 +22,11 @@ use anyhow::{Context, Result, anyhow};
 use coalshock::math::DefaultBackend;
 use serde::Serialize;
 
-use crate::physics::integrate::ContactProblem;
-use crate::physics::integrator_cases::{MethodCase, bench_ladder, paper_problems, relative_errors};
+use crate::physics::integrate::{ContactProblem, Method};
+use crate::physics::integrator_cases::{
+    BENCH_NEW_TOLERANCES, MethodCase, bench_ladder, heavy_ladder, paper_problems, relative_errors,
+};
+use crate::report::ode_solvers_ref::dop853_hertz;
 use crate::scene::{self, SceneFile};
 use crate::score::evaluate::{EvalOptions, evaluate};
 
@@ -97,6 +104,21 @@ pub struct SpeedReport {
     pub evaluate: Vec<EvaluateSpeed>,
 }
 
+/// Runs per second of `run` (the best of batches of 100 over `seconds`).
+fn best_rate(seconds: f64, mut run: impl FnMut() -> Result<()>) -> Result<f64> {
+    const BATCH: usize = 100;
+    let start = Instant::now();
+    let mut best = f64::INFINITY;
+    while best.is_infinite() || start.elapsed().as_secs_f64() < seconds {
+        let t = Instant::now();
+        for _ in 0..BATCH {
+            run()?;
+        }
+        best = best.min(t.elapsed().as_secs_f64() / BATCH as f64);
+    }
+    Ok(1.0 / best)
+}
+
 /// Integrations per second of `case` on `problem` (the best of batches of 100 over
 /// `seconds`), errors against `reference` (`F_max` in N, `t_c` in s) and work.
 fn integrator_speed(
@@ -106,29 +128,49 @@ fn integrator_speed(
     reference: (f64, f64),
     seconds: f64,
 ) -> Result<IntegratorSpeed> {
-    const BATCH: usize = 100;
     let sol = case.solve(problem)?;
     let (rel_err_peak_force, rel_err_duration) = relative_errors(&sol, reference.0, reference.1);
-    let start = Instant::now();
-    let mut best = f64::INFINITY;
-    while best.is_infinite() || start.elapsed().as_secs_f64() < seconds {
-        let t = Instant::now();
-        for _ in 0..BATCH {
-            std::hint::black_box(case.solve(std::hint::black_box(problem))?);
-        }
-        best = best.min(t.elapsed().as_secs_f64() / BATCH as f64);
-    }
+    let impacts_per_s = best_rate(seconds, || {
+        std::hint::black_box(case.solve(std::hint::black_box(problem))?);
+        Ok(())
+    })?;
     Ok(IntegratorSpeed {
         law,
         method: case.label.clone(),
-        impacts_per_s: 1.0 / best,
+        impacts_per_s,
         rel_err_peak_force,
         rel_err_duration,
-        force_evals: sol.work.force_evals,
+        force_evals: sol.work.force_evals + sol.work.jacobian_evals,
         steps: sol.work.steps,
         rejected_steps: sol.work.rejected_steps,
     })
 }
+
+/// The `ode_solvers` crate's Dop853 on the undamped Hertz contact at `rtol = atol = tol`
+/// ([`dop853_hertz`]), timed as [`integrator_speed`] times host-sim's methods.
+fn ode_solvers_speed(tol: f64, seconds: f64) -> Result<IntegratorSpeed> {
+    let failed = || anyhow!("ode_solvers' Dop853 failed at rtol {tol:.0e}");
+    let (rel_err_peak_force, rel_err_duration, force_evals) =
+        dop853_hertz(tol).ok_or_else(failed)?;
+    let impacts_per_s = best_rate(seconds, || {
+        std::hint::black_box(dop853_hertz(std::hint::black_box(tol)).ok_or_else(failed)?);
+        Ok(())
+    })?;
+    Ok(IntegratorSpeed {
+        law: "Hertz",
+        // Its first error is the rebound speed's (it has no peak search).
+        method: format!("{ODE_SOLVERS_LABEL} rtol {tol:.0e}"),
+        impacts_per_s,
+        rel_err_peak_force,
+        rel_err_duration,
+        force_evals,
+        steps: 0,
+        rejected_steps: 0,
+    })
+}
+
+/// The label of the `ode_solvers` rows (their F_max column holds the rebound speed's error).
+const ODE_SOLVERS_LABEL: &str = "ode_solvers dop853";
 
 /// Wall time of evaluating `impacts` impacts of `scene` (seed 1, default options) on a pool of
 /// `threads` threads (`None`: rayon's default pool).
@@ -192,12 +234,21 @@ pub fn measure(args: &SpeedOptions) -> Result<SpeedReport> {
             (adams_ref.peak_force_n, adams_ref.duration_s),
         ),
     ];
+    let heavy_ref = MethodCase::adaptive(Method::Rodas4, 1e-12).solve(&p.heavy)?;
+    let heavy = (heavy_ref.peak_force_n, heavy_ref.duration_s);
+    let secs = args.integrator_seconds;
     let mut integrator = Vec::new();
     for (law, problem, reference) in laws {
         for case in bench_ladder() {
-            let secs = args.integrator_seconds;
             integrator.push(integrator_speed(law, &case, problem, reference, secs)?);
         }
+    }
+    for &tol in &BENCH_NEW_TOLERANCES {
+        integrator.push(ode_solvers_speed(tol, secs)?);
+    }
+    for case in heavy_ladder() {
+        let law = "Adams c_max = 1 % k";
+        integrator.push(integrator_speed(law, &case, &p.heavy, heavy, secs)?);
     }
     let mut evaluate = vec![evaluate_speed(&scene, args.impacts, None)?];
     if args.one_thread {
@@ -239,12 +290,46 @@ pub fn render(r: &SpeedReport) -> String {
             e.impacts, e.threads, e.seconds, e.impacts_per_s
         );
     }
+    s += &ratios(r);
     if let [all, one] = r.evaluate.as_slice() {
         s += &format!(
             "\nspeed-up on {} threads: {:.2}\n",
             all.threads,
             one.seconds / all.seconds
         );
+    }
+    s
+}
+
+/// The undamped Hertz rows at each of [`BENCH_NEW_TOLERANCES`] side by side: each method's
+/// work and its throughput as a ratio to ode_solvers' Dop853 at the same tolerance, with the
+/// larger of its two errors (so that "equal accuracy" can be read off).
+fn ratios(r: &SpeedReport) -> String {
+    let methods = ["dopri5", "dop853", "rodas4", "auto", ODE_SOLVERS_LABEL];
+    let mut s = String::from(
+        "\n| Hertz, rtol | method | error (max of F_max or rebound, t_c) | force evals / impact | \
+         impacts/s / ode_solvers dop853 |\n| --- | --- | --- | --- | --- |\n",
+    );
+    for tol in BENCH_NEW_TOLERANCES {
+        let find = |m: &str| {
+            let label = format!("{m} rtol {tol:.0e}");
+            r.integrator
+                .iter()
+                .find(|i| i.law == "Hertz" && i.method == label)
+        };
+        let Some(base) = find(ODE_SOLVERS_LABEL) else {
+            continue;
+        };
+        for m in methods {
+            if let Some(i) = find(m) {
+                s += &format!(
+                    "| {tol:.0e} | {m} | {:.1e} | {} | {:.2} |\n",
+                    i.rel_err_peak_force.max(i.rel_err_duration),
+                    i.force_evals,
+                    i.impacts_per_s / base.impacts_per_s
+                );
+            }
+        }
     }
     s
 }

@@ -362,6 +362,9 @@ pub(crate) fn integrator_rows(
         });
         let (method, setting) = match case.method {
             Method::Dopri5 => ("dopri5", case.tol.rtol),
+            Method::Dop853 => ("dop853", case.tol.rtol),
+            Method::Rodas4 => ("rodas4", case.tol.rtol),
+            Method::Auto => ("auto", case.tol.rtol),
             Method::Rk4 { steps_per_tc } => ("rk4", f64::from(steps_per_tc)),
         };
         let MethodCase { label, .. } = case;
