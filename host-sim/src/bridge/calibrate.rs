@@ -21,7 +21,7 @@
 
 use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
-use coalshock::sampled_phase::neighbour_asymmetry;
+use coalshock::sampled_phase::{PHASE_FIRST_N, neighbour_asymmetry};
 use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 use coalshock::shape_fit::five_about;
 
@@ -581,20 +581,25 @@ pub fn shortest_measured_samples(scene: &SceneFile) -> Result<Option<f64>, SimEr
 }
 
 /// A warning when the shortest pulse the detector measures in `scene`
-/// ([`shortest_measured_samples`]) has fewer than the 2.5 samples the kernel's fit and its
-/// sampling correction start from (the kernel checks the Hertz contact time, not the damped
-/// pulse's); `None` otherwise.
+/// ([`shortest_measured_samples`]) has fewer samples than its sampling correction starts from:
+/// the phase table's first row, `coalshock::sampled_phase::PHASE_FIRST_N` (1.6), for a damped
+/// law, else the 2.5 of the correction by samples per pulse (the kernel checks the Hertz
+/// contact time, not the damped pulse's); `None` otherwise.
 pub fn sampling_warning(scene: &SceneFile) -> Result<Option<String>, SimError> {
+    let first = if scene.contact == LawSpec::Hertz {
+        f64::from(SAMPLED_FIRST_N)
+    } else {
+        f64::from(PHASE_FIRST_N)
+    };
     Ok(shortest_measured_samples(scene)?
-        .filter(|&n| n < SAMPLED_FIRST_N as f64)
+        .filter(|&n| n < first)
         .map(|n| {
             format!(
                 "the damped contact shortens the pulse the detector measures: the shortest has \
-                 {n:.2} samples, below the {SAMPLED_FIRST_N} the kernel's fit and its sampling \
-                 correction start from; below about 5 samples the fit's error follows the \
-                 samples' phase and is carried as noise (docs/grid.md), so expect forced choice \
-                 below the reference limit; raise the sample rate to at least {:.0} Hz",
-                scene.sensor.sample_rate_hz * SAMPLED_FIRST_N as f64 / n
+                 {n:.2} samples, below the {first} its sampling correction starts from, which \
+                 holds its first value there, so expect forced choice below the reference \
+                 limit; raise the sample rate to at least {:.0} Hz",
+                scene.sensor.sample_rate_hz * first / n
             )
         }))
 }
