@@ -120,6 +120,7 @@ fn bench(c: &mut Criterion) {
         sigma_ln_force: 0.002,
         sigma_ln_duration: 0.005,
         cov_ln: -4e-6,
+        asymmetry: 0.0,
     };
     c.bench_function(&format!("{backend}/classify one measurement"), |b| {
         b.iter(|| black_box(scene.classify(black_box(&meas))))

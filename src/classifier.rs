@@ -23,6 +23,10 @@ pub struct Measurement {
     /// sigma_ln_force^2`: about `-sigma_ln_force^2` when the peak and the area share little
     /// noise.
     pub cov_ln: f32,
+    /// Neighbour asymmetry of the pulse's largest sample
+    /// ([`crate::sampled_phase::neighbour_asymmetry`], `-1..=1`; 0 when the pulse was not
+    /// read with three samples): the sampling phase, for [`crate::SampledPhase`].
+    pub asymmetry: f32,
 }
 
 /// Why a pulse got no class at all.
@@ -274,22 +278,36 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// measurement's sigmas); the identity for an undamped elastic contact.
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
-        if c.sampled == SampledCalibration::NONE {
+        #[cfg(feature = "sampled_phase")]
+        let table = &self.settings().sampled_phase;
+        #[cfg(feature = "sampled_phase")]
+        let phase = *table != crate::SampledPhase::NONE;
+        #[cfg(not(feature = "sampled_phase"))]
+        let phase = false;
+        if c.sampled == SampledCalibration::NONE && !phase {
             return Measurement {
                 peak_force_n: m.peak_force_n / c.force_ratio,
                 duration_s: m.duration_s / c.duration_ratio,
                 ..*m
             };
         }
+        // The phase table where it reaches, else the correction by samples per pulse.
+        let at = |ln_n: f32| {
+            #[cfg(feature = "sampled_phase")]
+            if let Some(v) = table.at(ln_n, m.asymmetry) {
+                return v;
+            }
+            c.sampled.at(ln_n)
+        };
         // The table stands at the pulse's true samples per pulse, the measured duration over
         // its correction: two fixed-point steps, which contract while the correction's
         // slope in `ln n` is below 1 (0.22 at most behind the 6.3 kHz MEMS band).
         let ln_measured = M::ln(m.duration_s * self.sensor().sample_rate_hz);
         let mut ln_n = ln_measured;
         for _ in 0..2 {
-            ln_n = ln_measured - c.sampled.at(ln_n).1;
+            ln_n = ln_measured - at(ln_n).1;
         }
-        let (lf, lt, sf, st) = c.sampled.at(ln_n);
+        let (lf, lt, sf, st) = at(ln_n);
         let quad = |a: f32, b: f32| M::sqrt(a * a + b * b);
         Measurement {
             peak_force_n: m.peak_force_n / (c.force_ratio * M::exp(lf)),
@@ -298,6 +316,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             sigma_ln_duration: quad(m.sigma_ln_duration, st),
             // The calibration's spread of the peak comes back opposite in the duration too.
             cov_ln: m.cov_ln - sf * sf,
+            asymmetry: m.asymmetry,
         }
     }
 }

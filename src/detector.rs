@@ -1028,6 +1028,7 @@ impl<M: Backend> Detector<M> {
                 sigma_ln_force,
                 sigma_ln_duration,
                 cov_ln: shared - sigma_ln_force * sigma_ln_force,
+                asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
             }),
         }
     }
@@ -1072,6 +1073,7 @@ impl<M: Backend> Detector<M> {
                 sigma_ln_force: M::sqrt(f2 + floor2),
                 sigma_ln_duration: M::sqrt(t2 + floor2),
                 cov_ln: cov,
+                asymmetry: 0.0,
             }),
         }
     }

@@ -26,6 +26,7 @@ pub mod math;
 pub mod monitor;
 pub mod ratio_map;
 pub mod sampled;
+pub mod sampled_phase;
 pub mod scene;
 #[cfg(feature = "serde")]
 pub mod settings_serde;
@@ -45,5 +46,6 @@ pub use flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 pub use material::Material;
 pub use monitor::{Event, Monitor, Report};
 pub use scene::{
-    ContactCalibration, ParticleClass, SampledCalibration, Scene, SensorChain, Settings, Speed,
+    ContactCalibration, ParticleClass, SampledCalibration, SampledPhase, Scene, SensorChain,
+    Settings, Speed,
 };

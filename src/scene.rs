@@ -13,6 +13,7 @@ use crate::material::{Material, effective_modulus_pa};
 use crate::math::{Backend, DefaultBackend};
 use crate::ratio_map::RatioMap;
 pub use crate::sampled::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
+pub use crate::sampled_phase::SampledPhase;
 
 /// Shortest duration, in samples, that is classified: a pulse measured shorter (by more than
 /// three of its sigmas) is rejected as `TooShort`, and a scene whose shortest pulse is shorter
@@ -222,6 +223,11 @@ pub struct Settings {
     /// `plasticity` feature only.
     #[cfg(feature = "plasticity")]
     pub flat_top_ratio: f32,
+    /// A damped contact's sampling correction by samples per pulse and sampling phase, which
+    /// takes the place of `contact.sampled` where it reaches ([`SampledPhase::NONE`]: no
+    /// table). With the `sampled_phase` feature only.
+    #[cfg(feature = "sampled_phase")]
+    pub sampled_phase: SampledPhase,
 }
 
 /// A damped contact against the undamped Hertz model, as the detector measures it: the ratios
@@ -298,6 +304,8 @@ impl Default for Settings {
             area_ratio: 1.0,
             #[cfg(feature = "plasticity")]
             flat_top_ratio: 1.0,
+            #[cfg(feature = "sampled_phase")]
+            sampled_phase: SampledPhase::NONE,
         }
     }
 }
@@ -321,6 +329,8 @@ impl Settings {
             return Err(Error::OutOfRange("shape_tolerance"));
         }
         self.contact.check()?;
+        #[cfg(feature = "sampled_phase")]
+        self.sampled_phase.check()?;
         if !(self.spike_fraction.is_finite() && self.spike_fraction > 0.0) {
             return Err(Error::OutOfRange("spike_fraction"));
         }

@@ -20,6 +20,7 @@ fn exact(mat: Material, r: f64, u: f64) -> Measurement {
         sigma_ln_force: 0.0,
         sigma_ln_duration: 0.0,
         cov_ln: 0.0,
+        asymmetry: 0.0,
     }
 }
 
@@ -44,6 +45,7 @@ fn inversion_round_trip_over_the_scene() {
                     sigma_ln_force: 0.0,
                     sigma_ln_duration: 0.0,
                     cov_ln: 0.0,
+                    asymmetry: 0.0,
                 };
                 let inv = scene.invert(ci, &m).unwrap();
                 assert!(
@@ -150,6 +152,7 @@ fn bad_measurements_are_rejected_not_panicking() {
             sigma_ln_force: f32::NAN,
             sigma_ln_duration: -1.0,
             cov_ln: f32::NAN,
+            asymmetry: 0.0,
         };
         assert_eq!(
             scene.classify(&m),

@@ -1077,6 +1077,7 @@ fn settings_field() -> impl Strategy<Value = Settings> {
                 skew_tolerance: 0.05,
                 area_ratio: 1.0,
                 flat_top_ratio: 1.0,
+                sampled_phase: coalshock::SampledPhase::NONE,
             },
         )
 }

@@ -92,6 +92,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
             sigma_ln_force: 0.1 * rng.uniform() as f32,
             sigma_ln_duration: 0.1 * rng.uniform() as f32,
             cov_ln: 0.0,
+            asymmetry: 0.0,
         };
         let (v, lls) = scene.classify_with_likelihoods(&m);
         assert_eq!(v, scene.classify(&m));
@@ -103,6 +104,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
         sigma_ln_force: 0.0,
         sigma_ln_duration: 0.0,
         cov_ln: 0.0,
+        asymmetry: 0.0,
     };
     assert_eq!(scene.classify_with_likelihoods(&bad).1, None);
 }

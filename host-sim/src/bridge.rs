@@ -6,3 +6,4 @@ pub mod calibrate;
 pub mod convert;
 pub mod kernel_scene;
 pub mod ratio_table;
+pub mod sampled_phase;

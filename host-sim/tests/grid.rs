@@ -115,8 +115,8 @@ fn hunt_crossley_at_25k_with_skewed_priors() {
 
 /// Flores at e 0.3 measures a pulse 0.58 of the Hertz contact time from its area: at the
 /// lowest rate the kernel accepts (2.5 samples in the shortest Hertz pulse) its shortest
-/// measured pulse has about 1.45, and the scene build warns; at the rate the warning names it
-/// has 2.5, and at 100 kS/s, or for the undamped paper scene, nothing is said.
+/// measured pulse has about 1.45, below the 1.6 of the phase table's first row, and the scene
+/// build warns; at 2.5 samples, and at 100 kS/s, or for the undamped paper scene, nothing is said.
 #[test]
 fn a_damped_scene_warns_when_its_measured_pulses_are_too_short() {
     use host_sim::calibrate::{sampling_warning, shortest_measured_samples};

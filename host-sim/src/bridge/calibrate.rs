@@ -21,9 +21,11 @@
 
 use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
+use coalshock::sampled_phase::{PHASE_FIRST_N, neighbour_asymmetry};
 use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 use coalshock::shape_fit::five_about;
 
+use crate::bridge::sampled_phase::{Phase64, phase_calibration};
 use crate::physics::hertz64::HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR;
 use crate::physics::impact::{ImpactSpec, simulate};
 use crate::physics::integrate::SimError;
@@ -107,8 +109,15 @@ pub fn sampled_calibration(pulses: &[ContinuousPulse]) -> Sampled64 {
 /// The kernel's fit of `series` sampled every `dt` from phase `phase / SAMPLED_PHASES`: peak
 /// (N) and duration (samples).
 fn fit_sampled(series: &[(f64, f64)], dt: f64, phase: usize) -> Option<(f64, f64)> {
+    fit_sampled_at(series, dt, phase as f64 / SAMPLED_PHASES as f64).map(|(f, t, _)| (f, t))
+}
+
+/// The kernel's fit of `series` sampled every `dt` from `phase * dt` after its start
+/// (`0 <= phase < 1`): peak (N), duration (samples) and the neighbour asymmetry the detector
+/// reports (`coalshock::sampled_phase::neighbour_asymmetry`).
+pub fn fit_sampled_at(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<(f64, f64, f64)> {
     let last = series.last()?.0;
-    let mut t = series.first()?.0 + dt * phase as f64 / SAMPLED_PHASES as f64;
+    let mut t = series.first()?.0 + dt * phase;
     let mut v = Vec::new();
     while t < last {
         v.push(force_at(series, t));
@@ -117,13 +126,15 @@ fn fit_sampled(series: &[(f64, f64)], dt: f64, phase: usize) -> Option<(f64, f64
     let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
     let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+    let top = five_about(&v32, i);
     // A calibrated (damped or yielding) contact's pulses are read with three samples.
-    let (peak, samples) = shape_fit::<Libm>(five_about(&v32, i), sum as f32, false)?;
-    Some((peak as f64, samples as f64))
+    let (peak, samples) = shape_fit::<Libm>(top, sum as f32, false)?;
+    let a = neighbour_asymmetry(top[1], top[2], top[3]);
+    Some((peak as f64, samples as f64, a as f64))
 }
 
 /// Mean and standard deviation of `v` (0 and 0 when empty).
-fn mean_and_sigma(v: &[f64]) -> (f64, f64) {
+pub fn mean_and_sigma(v: &[f64]) -> (f64, f64) {
     if v.is_empty() {
         return (0.0, 0.0);
     }
@@ -164,6 +175,10 @@ pub struct Calibration64 {
     /// scene's shortest pulse has 24 samples or more (the detector then fits a smoothed top,
     /// whose error does not depend on the pulse's skew).
     pub sampled: Option<Sampled64>,
+    /// The damped contact's correction by samples per pulse and sampling phase
+    /// ([`phase_calibration`]), with `sampled`; `None` for a contact of the Hertz law (a
+    /// yielding one).
+    pub phase: Option<Phase64>,
     /// Mean skewness of the impacts' whole pulses (above 0.5 % of the peak; 0 for Hertz).
     pub skewness: f64,
     /// Largest distance of one impact's skewness from the mean.
@@ -488,8 +503,10 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
                 duration_s,
             })
             .collect();
-        sampled_calibration(&continuous)
+        let phase = (scene.contact != LawSpec::Hertz).then(|| phase_calibration(&continuous));
+        (sampled_calibration(&continuous), phase)
     });
+    let (sampled_fit, phase) = sampled_fit.map_or((None, None), |(s, p)| (Some(s), p));
     let n = all.len() as f64;
     let skew_mean = skews.iter().sum::<f64>() / n;
     let trigger_sigmas = f64::from(scene.settings.trigger_sigmas);
@@ -532,6 +549,7 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         sharpest_bend: bend,
         sampled_shape_spread: sampled,
         sampled: sampled_fit,
+        phase,
         area_ratio: (ln_area_ratio / n).exp(),
         flat_top_ratio: (ln_top / n).exp(),
     }))
@@ -563,20 +581,25 @@ pub fn shortest_measured_samples(scene: &SceneFile) -> Result<Option<f64>, SimEr
 }
 
 /// A warning when the shortest pulse the detector measures in `scene`
-/// ([`shortest_measured_samples`]) has fewer than the 2.5 samples the kernel's fit and its
-/// sampling correction start from (the kernel checks the Hertz contact time, not the damped
-/// pulse's); `None` otherwise.
+/// ([`shortest_measured_samples`]) has fewer samples than its sampling correction starts from:
+/// the phase table's first row, `coalshock::sampled_phase::PHASE_FIRST_N` (1.6), for a damped
+/// law, else the 2.5 of the correction by samples per pulse (the kernel checks the Hertz
+/// contact time, not the damped pulse's); `None` otherwise.
 pub fn sampling_warning(scene: &SceneFile) -> Result<Option<String>, SimError> {
+    let first = if scene.contact == LawSpec::Hertz {
+        f64::from(SAMPLED_FIRST_N)
+    } else {
+        f64::from(PHASE_FIRST_N)
+    };
     Ok(shortest_measured_samples(scene)?
-        .filter(|&n| n < SAMPLED_FIRST_N as f64)
+        .filter(|&n| n < first)
         .map(|n| {
             format!(
                 "the damped contact shortens the pulse the detector measures: the shortest has \
-                 {n:.2} samples, below the {SAMPLED_FIRST_N} the kernel's fit and its sampling \
-                 correction start from; below about 5 samples the fit's error follows the \
-                 samples' phase and is carried as noise (docs/grid.md), so expect forced choice \
-                 below the reference limit; raise the sample rate to at least {:.0} Hz",
-                scene.sensor.sample_rate_hz * SAMPLED_FIRST_N as f64 / n
+                 {n:.2} samples, below the {first} its sampling correction starts from, which \
+                 holds its first value there, so expect forced choice below the reference \
+                 limit; raise the sample rate to at least {:.0} Hz",
+                scene.sensor.sample_rate_hz * first / n
             )
         }))
 }

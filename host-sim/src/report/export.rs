@@ -15,9 +15,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use coalshock::ratio_map::RatioMap;
+use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS};
 use coalshock::{
     Accelerometer, BeamMode, ChainDynamics, ChainTolerance, ContactCalibration, Material,
-    ParticleClass, Range, SampledCalibration, Settings, Speed,
+    ParticleClass, Range, SampledCalibration, SampledPhase, Settings, Speed,
 };
 
 use crate::bridge::convert::{
@@ -192,12 +193,47 @@ fn sampled_literal(s: &SampledCalibration) -> String {
     )
 }
 
+/// `sampled_phase: SampledPhase { .. },` (a firmware that runs such a scene enables the kernel's
+/// `sampled_phase` feature), or nothing for [`SampledPhase::NONE`].
+fn phase_field(p: &SampledPhase) -> String {
+    if *p == SampledPhase::NONE {
+        return String::new();
+    }
+    let rows = |name: &str, t: &[[f32; PHASE_COLUMNS]; PHASE_ROWS]| {
+        let body: Vec<String> = t
+            .iter()
+            .map(|r| {
+                let v: Vec<String> = r.iter().map(|&x| lit(x)).collect();
+                format!("                [{}],\n", v.join(", "))
+            })
+            .collect();
+        format!("            {name}: [\n{}            ],\n", body.concat())
+    };
+    let axes: Vec<String> = p
+        .asymmetry
+        .iter()
+        .map(|[a, b]| format!("                [{}, {}],\n", lit(*a), lit(*b)))
+        .collect();
+    format!(
+        "        sampled_phase: SampledPhase {{\n            asymmetry: [\n{}            ],\n{}{}{}{}        }},\n",
+        axes.concat(),
+        rows("ln_force", &p.ln_force),
+        rows("ln_duration", &p.ln_duration),
+        rows("sigma_ln_force", &p.sigma_ln_force),
+        rows("sigma_ln_duration", &p.sigma_ln_duration),
+    )
+}
+
 /// The settings as `Settings { .., ..Settings::default() }` with every field whose bits differ
 /// from the default's (host-sim starts from the default too), or `Settings::default()`.
 fn settings(out: &mut String, s: &Settings) {
     let mut fields = changed_fields(s);
     if !contact_is_default(&s.contact) {
         fields.push(contact_field(&s.contact));
+    }
+    let phase = phase_field(&s.sampled_phase);
+    if !phase.is_empty() {
+        fields.push(phase);
     }
     if fields.is_empty() {
         out.push_str("    let settings = Settings::default();\n");
@@ -231,6 +267,7 @@ fn changed_fields(s: &Settings) -> Vec<String> {
         skew_tolerance,
         area_ratio,
         flat_top_ratio,
+        sampled_phase: _,
     } = *s;
     let mut fields = Vec::new();
     let mut float = |name: &str, v: f32, default: f32| {
@@ -371,6 +408,9 @@ fn imports(out: &mut String, settings: &Settings, dynamics: &ChainDynamics, tabl
     if !contact_is_default(&settings.contact) {
         // The calibration literal names its sampling correction (or its `NONE`).
         uses.extend(["ContactCalibration", "SampledCalibration"]);
+    }
+    if settings.sampled_phase != SampledPhase::NONE {
+        uses.push("SampledPhase");
     }
     uses.extend(["Range", "Scene", "SensorChain", "Settings", "Speed"]);
     if !dynamics.is_rigid() {
