@@ -362,14 +362,43 @@ const D: [[f64; 16]; 4] = [
     ],
 ];
 
-/// `y + h sum_j a_j k_j` over the stages given.
-fn combine(y: [f64; 2], h: f64, a: &[f64], ks: &[[f64; 2]]) -> [f64; 2] {
+/// The columns `j` where row `s` of [`A`] is non-zero (in increasing order): the stages skip
+/// the zero products (about a third of them), which change no sum.
+const A_NONZERO: [&[usize]; 14] = [
+    &[0],
+    &[0, 1],
+    &[0, 2],
+    &[0, 2, 3],
+    &[0, 3, 4],
+    &[0, 3, 4, 5],
+    &[0, 3, 4, 5, 6],
+    &[0, 3, 4, 5, 6, 7],
+    &[0, 3, 4, 5, 6, 7, 8],
+    &[0, 3, 4, 5, 6, 7, 8, 9],
+    &[0, 3, 4, 5, 6, 7, 8, 9, 10],
+    &[0, 6, 7, 8, 9, 10, 11, 12],
+    &[0, 5, 6, 7, 10, 11, 12, 13],
+    &[0, 5, 6, 7, 8, 12, 13, 14],
+];
+/// The stages where [`B`] and [`E`] are non-zero.
+const B_NONZERO: [usize; 8] = [0, 5, 6, 7, 8, 9, 10, 11];
+/// The stages where the rows of [`D`] are non-zero.
+const D_NONZERO: [usize; 12] = [0, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+
+/// `y + h sum_j a_j k_j` over the non-zero columns `j` of row `row` of [`A`].
+fn combine(y: [f64; 2], h: f64, row: usize, ks: &[[f64; 2]; 16]) -> [f64; 2] {
     let (mut s0, mut s1) = (0.0, 0.0);
-    for (&aj, k) in a.iter().zip(ks) {
+    for &j in A_NONZERO[row] {
+        let (aj, k) = (A[row][j], ks[j]);
         s0 += aj * k[0];
         s1 += aj * k[1];
     }
     [y[0] + h * s0, y[1] + h * s1]
+}
+
+/// `sum_j c_j k_j[i]` over the stages `j` in `idx`.
+fn dot(idx: &[usize], c: &[f64], ks: &[[f64; 2]; 16], i: usize) -> f64 {
+    idx.iter().map(|&j| c[j] * ks[j][i]).sum()
 }
 
 /// One DOP853 step of size `h` from `(t, y)` with slope `k1`. The error is Hairer's
@@ -388,14 +417,17 @@ pub(super) fn dop853_step(
     let mut ks = [[0.0; 2]; 16];
     ks[0] = k1;
     for s in 1..12 {
-        ks[s] = rhs.f(combine(y, h, &A[s - 1][..s], &ks[..s]));
+        ks[s] = rhs.f(combine(y, h, s - 1, &ks));
     }
-    let y1 = combine(y, h, &B, &ks[..12]);
+    let y1 = {
+        let b = |i| dot(&B_NONZERO, &B, &ks, i);
+        [y[0] + h * b(0), y[1] + h * b(1)]
+    };
     let (mut err5, mut err3) = (0.0, 0.0);
     for i in 0..2 {
         let sk = scale.sk(i, y[i], y1[i]);
-        let e5: f64 = E.iter().zip(&ks).map(|(e, k)| e * k[i]).sum();
-        let bsum: f64 = B.iter().zip(&ks).map(|(b, k)| b * k[i]).sum();
+        let e5 = dot(&B_NONZERO, &E, &ks, i);
+        let bsum = dot(&B_NONZERO, &B, &ks, i);
         let e3 = bsum - BHH[0] * ks[0][i] - BHH[1] * ks[8][i] - BHH[2] * ks[11][i];
         err5 += (e5 / sk) * (e5 / sk);
         err3 += (e3 / sk) * (e3 / sk);
@@ -418,7 +450,7 @@ pub(super) fn dop853_step(
     ks[12] = rhs.f(y1);
     let force1_n = rhs.last_force_n;
     for s in 13..16 {
-        ks[s] = rhs.f(combine(y, h, &A[s - 2][..s], &ks[..s]));
+        ks[s] = rhs.f(combine(y, h, s - 2, &ks));
     }
     let mut r = [[0.0; 8]; 2];
     for i in 0..2 {
@@ -426,7 +458,7 @@ pub(super) fn dop853_step(
         let bspl = h * k1[i] - ydiff;
         r[i][..4].copy_from_slice(&[y[i], ydiff, bspl, ydiff - h * ks[12][i] - bspl]);
         for (rj, d) in r[i][4..].iter_mut().zip(&D) {
-            *rj = h * d.iter().zip(&ks).map(|(dj, k)| dj * k[i]).sum::<f64>();
+            *rj = h * dot(&D_NONZERO, d, &ks, i);
         }
     }
     Trial {
@@ -435,5 +467,31 @@ pub(super) fn dop853_step(
         force1_n,
         seg: Segment::nested(t, h, r),
         err,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sparse index lists hold every non-zero coefficient of the tableau.
+    #[test]
+    fn the_nonzero_lists_cover_the_tableau() {
+        for (row, nz) in A.iter().zip(A_NONZERO) {
+            for (j, a) in row.iter().enumerate() {
+                assert!(*a == 0.0 || nz.contains(&j), "A column {j}");
+            }
+        }
+        for (j, (b, e)) in B.iter().zip(&E).enumerate() {
+            assert!(
+                (*b == 0.0 && *e == 0.0) || B_NONZERO.contains(&j),
+                "B/E stage {j}"
+            );
+        }
+        for d in &D {
+            for (j, dj) in d.iter().enumerate() {
+                assert!(*dj == 0.0 || D_NONZERO.contains(&j), "D stage {j}");
+            }
+        }
     }
 }
