@@ -54,6 +54,23 @@ impl Poly {
         p
     }
 
+    /// True when a cheap bound proves that the polynomial keeps the strict sign of `c_0` on
+    /// [0, 1]: for `theta` there, `c_0 + sum_(k>=1) min(c_k, 0) <= p(theta) <= c_0 +
+    /// sum_(k>=1) max(c_k, 0)` (as `theta^k <= 1`), less a rounding margin
+    /// `4 (deg + 1) eps sum_k |c_k|` that also covers Horner's evaluation error. Settles most
+    /// steps without the Bernstein coefficients.
+    pub fn keeps_sign_on_unit(&self) -> bool {
+        let c = &self.c[..=self.deg];
+        let (mut neg, mut pos, mut abs) = (0.0_f64, 0.0_f64, c[0].abs());
+        for &ck in &c[1..] {
+            neg += ck.min(0.0);
+            pos += ck.max(0.0);
+            abs += ck.abs();
+        }
+        let margin = 4.0 * (self.deg as f64 + 1.0) * f64::EPSILON * abs;
+        (c[0] > 0.0 && c[0] + neg > margin) || (c[0] < 0.0 && c[0] + pos < -margin)
+    }
+
     /// Bernstein coefficients `b_0 ..= b_deg` of the polynomial restricted to `[a, b]`
     /// (the rest 0): Taylor shift to `a` (`q_j = p^(j)(a) (b - a)^j / j!`), then
     /// `b_i = sum_(j <= i) C(i, j) / C(deg, j) q_j`.

@@ -48,6 +48,25 @@ impl Segment {
         [c(&self.r[0]), c(&self.r[1])]
     }
 
+    /// True when a cheap interval bound on the nested form proves that component `i` minus
+    /// `level` keeps one strict sign on [0, 1]: from the innermost term out, `acc = r_k + w acc`
+    /// with `w` (`theta` or `1 - theta`) in [0, 1] lies in `[r_k + min(lo, 0), r_k + max(hi, 0)]`.
+    /// The margin `1e-11 sum |r_k|` dwarfs the rounding of this bound, of the power-basis
+    /// conversion ([`Segment::poly`]) and of its evaluation, so a root search on the
+    /// polynomial would find no sign change either.
+    pub(super) fn keeps_sign(&self, i: usize, level: f64) -> bool {
+        let r = &self.r[i][..self.n];
+        let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
+        let mut abs = level.abs();
+        for (k, &rk) in r.iter().enumerate().rev() {
+            let rk = if k == 0 { rk - level } else { rk };
+            (lo, hi) = (rk + lo.min(0.0), rk + hi.max(0.0));
+            abs += rk.abs();
+        }
+        let margin = 1e-11 * abs;
+        lo > margin || hi < -margin
+    }
+
     /// Component `i` of the output as a power-basis polynomial in `theta` of degree `n - 1`.
     pub(super) fn poly(&self, i: usize) -> Poly {
         let r = &self.r[i];

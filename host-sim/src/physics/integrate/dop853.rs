@@ -362,14 +362,57 @@ const D: [[f64; 16]; 4] = [
     ],
 ];
 
-/// `y + h sum_j a_j k_j` over the stages given.
-fn combine(y: [f64; 2], h: f64, a: &[f64], ks: &[[f64; 2]]) -> [f64; 2] {
+/// Row `row` of [`A`] at its non-zero columns `idx` as `(j, a_j)` pairs: each stage's sum is
+/// a constant, fully unrolled list (the zero products, about a third, are skipped; they change
+/// no sum).
+const fn terms<const N: usize>(row: usize, idx: [usize; N]) -> [(usize, f64); N] {
+    let mut out = [(0, 0.0); N];
+    let mut k = 0;
+    while k < N {
+        out[k] = (idx[k], A[row][idx[k]]);
+        k += 1;
+    }
+    out
+}
+const S2: [(usize, f64); 1] = terms(0, [0]);
+const S3: [(usize, f64); 2] = terms(1, [0, 1]);
+const S4: [(usize, f64); 2] = terms(2, [0, 2]);
+const S5: [(usize, f64); 3] = terms(3, [0, 2, 3]);
+const S6: [(usize, f64); 3] = terms(4, [0, 3, 4]);
+const S7: [(usize, f64); 4] = terms(5, [0, 3, 4, 5]);
+const S8: [(usize, f64); 5] = terms(6, [0, 3, 4, 5, 6]);
+const S9: [(usize, f64); 6] = terms(7, [0, 3, 4, 5, 6, 7]);
+const S10: [(usize, f64); 7] = terms(8, [0, 3, 4, 5, 6, 7, 8]);
+const S11: [(usize, f64); 8] = terms(9, [0, 3, 4, 5, 6, 7, 8, 9]);
+const S12: [(usize, f64); 9] = terms(10, [0, 3, 4, 5, 6, 7, 8, 9, 10]);
+const S14: [(usize, f64); 8] = terms(11, [0, 6, 7, 8, 9, 10, 11, 12]);
+const S15: [(usize, f64); 8] = terms(12, [0, 5, 6, 7, 10, 11, 12, 13]);
+const S16: [(usize, f64); 8] = terms(13, [0, 5, 6, 7, 8, 12, 13, 14]);
+/// The stages where [`B`] and [`E`] are non-zero.
+const B_NONZERO: [usize; 8] = [0, 5, 6, 7, 8, 9, 10, 11];
+/// The stages where the rows of [`D`] are non-zero.
+const D_NONZERO: [usize; 12] = [0, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
+
+/// `y + h sum_j a_j k_j` over the `(j, a_j)` given.
+#[inline(always)]
+fn combine<const N: usize>(
+    y: [f64; 2],
+    h: f64,
+    terms: &[(usize, f64); N],
+    ks: &[[f64; 2]; 16],
+) -> [f64; 2] {
     let (mut s0, mut s1) = (0.0, 0.0);
-    for (&aj, k) in a.iter().zip(ks) {
-        s0 += aj * k[0];
-        s1 += aj * k[1];
+    for &(j, aj) in terms {
+        s0 += aj * ks[j][0];
+        s1 += aj * ks[j][1];
     }
     [y[0] + h * s0, y[1] + h * s1]
+}
+
+/// `sum_j c_j k_j[i]` over the stages `j` in `idx`.
+#[inline(always)]
+fn dot<const N: usize>(idx: &[usize; N], c: &[f64], ks: &[[f64; 2]; 16], i: usize) -> f64 {
+    idx.iter().map(|&j| c[j] * ks[j][i]).sum()
 }
 
 /// One DOP853 step of size `h` from `(t, y)` with slope `k1`. The error is Hairer's
@@ -387,15 +430,26 @@ pub(super) fn dop853_step(
 ) -> Trial {
     let mut ks = [[0.0; 2]; 16];
     ks[0] = k1;
-    for s in 1..12 {
-        ks[s] = rhs.f(combine(y, h, &A[s - 1][..s], &ks[..s]));
-    }
-    let y1 = combine(y, h, &B, &ks[..12]);
+    ks[1] = rhs.f(combine(y, h, &S2, &ks));
+    ks[2] = rhs.f(combine(y, h, &S3, &ks));
+    ks[3] = rhs.f(combine(y, h, &S4, &ks));
+    ks[4] = rhs.f(combine(y, h, &S5, &ks));
+    ks[5] = rhs.f(combine(y, h, &S6, &ks));
+    ks[6] = rhs.f(combine(y, h, &S7, &ks));
+    ks[7] = rhs.f(combine(y, h, &S8, &ks));
+    ks[8] = rhs.f(combine(y, h, &S9, &ks));
+    ks[9] = rhs.f(combine(y, h, &S10, &ks));
+    ks[10] = rhs.f(combine(y, h, &S11, &ks));
+    ks[11] = rhs.f(combine(y, h, &S12, &ks));
+    let y1 = {
+        let b = |i| dot(&B_NONZERO, &B, &ks, i);
+        [y[0] + h * b(0), y[1] + h * b(1)]
+    };
     let (mut err5, mut err3) = (0.0, 0.0);
     for i in 0..2 {
         let sk = scale.sk(i, y[i], y1[i]);
-        let e5: f64 = E.iter().zip(&ks).map(|(e, k)| e * k[i]).sum();
-        let bsum: f64 = B.iter().zip(&ks).map(|(b, k)| b * k[i]).sum();
+        let e5 = dot(&B_NONZERO, &E, &ks, i);
+        let bsum = dot(&B_NONZERO, &B, &ks, i);
         let e3 = bsum - BHH[0] * ks[0][i] - BHH[1] * ks[8][i] - BHH[2] * ks[11][i];
         err5 += (e5 / sk) * (e5 / sk);
         err3 += (e3 / sk) * (e3 / sk);
@@ -417,16 +471,16 @@ pub(super) fn dop853_step(
     }
     ks[12] = rhs.f(y1);
     let force1_n = rhs.last_force_n;
-    for s in 13..16 {
-        ks[s] = rhs.f(combine(y, h, &A[s - 2][..s], &ks[..s]));
-    }
+    ks[13] = rhs.f(combine(y, h, &S14, &ks));
+    ks[14] = rhs.f(combine(y, h, &S15, &ks));
+    ks[15] = rhs.f(combine(y, h, &S16, &ks));
     let mut r = [[0.0; 8]; 2];
     for i in 0..2 {
         let ydiff = y1[i] - y[i];
         let bspl = h * k1[i] - ydiff;
         r[i][..4].copy_from_slice(&[y[i], ydiff, bspl, ydiff - h * ks[12][i] - bspl]);
         for (rj, d) in r[i][4..].iter_mut().zip(&D) {
-            *rj = h * d.iter().zip(&ks).map(|(dj, k)| dj * k[i]).sum::<f64>();
+            *rj = h * dot(&D_NONZERO, d, &ks, i);
         }
     }
     Trial {
@@ -435,5 +489,35 @@ pub(super) fn dop853_step(
         force1_n,
         seg: Segment::nested(t, h, r),
         err,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sparse index lists hold every non-zero coefficient of the tableau.
+    #[test]
+    fn the_nonzero_lists_cover_the_tableau() {
+        let stages: [&[(usize, f64)]; 14] = [
+            &S2, &S3, &S4, &S5, &S6, &S7, &S8, &S9, &S10, &S11, &S12, &S14, &S15, &S16,
+        ];
+        for (row, terms) in A.iter().zip(stages) {
+            for (j, a) in row.iter().enumerate() {
+                let listed = terms.iter().any(|&(jt, at)| jt == j && at == *a);
+                assert!(*a == 0.0 || listed, "A column {j}");
+            }
+        }
+        for (j, (b, e)) in B.iter().zip(&E).enumerate() {
+            assert!(
+                (*b == 0.0 && *e == 0.0) || B_NONZERO.contains(&j),
+                "B/E stage {j}"
+            );
+        }
+        for d in &D {
+            for (j, dj) in d.iter().enumerate() {
+                assert!(*dj == 0.0 || D_NONZERO.contains(&j), "D stage {j}");
+            }
+        }
     }
 }

@@ -72,6 +72,10 @@ pub(super) fn contact_scales(problem: &ContactProblem) -> Result<Scales, SimErro
     })
 }
 
+/// Segments reserved up front: a contact at a tight tolerance takes about 50 steps, so the
+/// output does not grow (and copy) step by step.
+const SEGMENTS_RESERVED: usize = 64;
+
 /// The state of one contact's integration: the right-hand side (whose law turns), the
 /// accepted steps' continuous output, and where the last step ended.
 pub(super) struct ContactRun {
@@ -131,8 +135,8 @@ impl ContactRun {
             clamp_switch: ClampSwitch { law, d_m, u_m_s: u },
             turned: None,
             work: WorkStats::default(),
-            segments: Vec::new(),
-            start_force_n: Vec::new(),
+            segments: Vec::with_capacity(SEGMENTS_RESERVED),
+            start_force_n: Vec::with_capacity(SEGMENTS_RESERVED),
             t: 0.0,
             y,
             f,

@@ -63,9 +63,24 @@ pub(super) fn find_event(
     (clamp_budget, clamp_splits): (usize, usize),
 ) -> Option<Event> {
     let (x_end, await_turn) = ends;
+    // Most steps: no clamp to search, and the nested form's bound keeps every polynomial
+    // switching function off zero, without the power-basis polynomials.
+    if clamp.is_none()
+        && seg.keeps_sign(0, x_end)
+        && x_kink.is_none_or(|xk| seg.keeps_sign(0, xk))
+        && (!await_turn || seg.keeps_sign(1, 0.0))
+    {
+        return None;
+    }
     let x = seg.poly(0);
-    let poly_root =
-        |p: Poly, a: f64| earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0);
+    // The cheap sign bound first: most steps keep every polynomial switching function away
+    // from zero, and the search would find no root there either.
+    let poly_root = |p: Poly, a: f64| {
+        if p.keeps_sign_on_unit() {
+            return None;
+        }
+        earliest_root(&|th| p.eval(th), &|lo, hi| p.enclosure(lo, hi), a, 1.0)
+    };
     // At first contact x(0) = 0: that root is the start, not an end.
     let x_rel = x.minus(x_end);
     let end = poly_root(
