@@ -96,6 +96,7 @@ mod control;
 mod dense;
 mod dop853;
 mod dopri5;
+mod error_scale;
 mod peak;
 mod rhs;
 mod rk4;

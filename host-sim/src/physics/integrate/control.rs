@@ -5,6 +5,7 @@
 use crate::physics::hertz64::HERTZ_TC_FACTOR;
 use crate::physics::integrate::dop853::dop853_step;
 use crate::physics::integrate::dopri5::dopri_step;
+use crate::physics::integrate::error_scale::ErrorScale;
 use crate::physics::integrate::rhs::{Rhs, Trial, spectral_radius};
 use crate::physics::integrate::rk4::rk4_step;
 use crate::physics::integrate::rodas4::rodas4_step;
@@ -35,36 +36,6 @@ pub(super) const CALM_STEPS: u32 = 3;
 /// unbounded search costs 2^depth evaluations; past this many halvings a part is searched for
 /// a sign change between its ends only. Dopri5 and RK4 search without a bound, as before.
 pub(super) const CLAMP_SPLITS: usize = 16;
-
-/// The error scale of every adaptive method but Dopri5: component `i` that went from `y0`
-/// to `y1` in a step has `sk = rtol m + atol min(1, max(m, floor_i))`, `m = max(|y0|, |y1|)`,
-/// with the floor the largest penetration so far for `x` and 0 for `v`. The absolute part
-/// counts fully only for a component as large as its Hertz scale (`delta_max`, `u`):
-/// * the rate `v` is held to relative accuracy whatever its size, so that the slow creep out
-///   of a heavily damped contact (`delta' ~ 1e-4 u`) keeps the relative accuracy of its speed,
-///   and with it that of the contact time and the rebound;
-/// * the penetration `x` is held to `atol` times the contact's own largest penetration (a
-///   heavily damped contact reaches a few percent of the Hertz `delta_max`), not to relative
-///   accuracy as it returns to 0 (the contact end is a root of `x`; its time is then as
-///   accurate as `x` is against its rate).
-///
-/// Dopri5 keeps `atol + rtol m`, so that its results stay as they were. Never below the least
-/// positive f64.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct ErrorScale {
-    pub(super) tol: Tolerance,
-    /// The largest scaled penetration `x` so far.
-    pub(super) x_peak: f64,
-}
-
-impl ErrorScale {
-    /// `sk` of component `i` (0: `x`, 1: `v`) over a step from `y0` to `y1`.
-    pub(super) fn sk(&self, i: usize, y0: f64, y1: f64) -> f64 {
-        let m = y0.abs().max(y1.abs());
-        let floor = if i == 0 { self.x_peak } else { 0.0 };
-        (self.tol.rtol * m + self.tol.atol * m.max(floor).min(1.0)).max(f64::MIN_POSITIVE)
-    }
-}
 
 /// The step a controller takes now.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -4,8 +4,8 @@
 //! Coefficients: Hairer, Norsett & Wanner, *Solving ODEs I*, II.10, and Hairer's `DOP853`
 //! (`CONTD8`); the same digits as the `ode_solvers` crate's tableau.
 
-use crate::physics::integrate::control::ErrorScale;
 use crate::physics::integrate::dense::Segment;
+use crate::physics::integrate::error_scale::ErrorScale;
 use crate::physics::integrate::rhs::{Rhs, Trial};
 
 /// `a_(s,j)` of stages 2..=12 (row `s - 2`, column `j - 1`), then 14..=16 (rows 11..=13).

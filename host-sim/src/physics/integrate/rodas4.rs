@@ -8,8 +8,8 @@
 //! `y(theta) = (1 - theta) y0 + theta (y1 + (1 - theta) (d2 + theta d3))` with
 //! `d2 = sum_j d2j k_j`, `d3 = sum_j d3j k_j` over the first five stages.
 
-use crate::physics::integrate::control::ErrorScale;
 use crate::physics::integrate::dense::Segment;
+use crate::physics::integrate::error_scale::ErrorScale;
 use crate::physics::integrate::rhs::{Rhs, Trial};
 
 const GAMMA: f64 = 0.25;
