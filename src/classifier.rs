@@ -143,6 +143,31 @@ impl Verdict {
     }
 }
 
+/// A measured pulse as the classifier weighs it (see `Scene::pulse_point`).
+struct PulsePoint {
+    /// `ln F_max` (F in N) and `ln t_c` (t in s).
+    lf: f32,
+    lt: f32,
+    /// Standard deviations of `ln F_max` and `ln t_c` with the model's, and their covariance.
+    sf: f32,
+    st: f32,
+    cov: f32,
+    /// That noise, and widened by the chain's `bias` of `ln F_max`.
+    noise: NoiseXy,
+    bias: f32,
+    wide: NoiseXy,
+}
+
+/// What weighing the classes found (see `Scene::weigh_classes`).
+struct Weighed {
+    /// The nearest class and its squared distance in sigmas.
+    nearest: u8,
+    nearest_d: f32,
+    /// The best class on the measurement's own noise, and its log-likelihood with prior.
+    best: u8,
+    best_ll: f32,
+}
+
 impl<const N: usize, M: Backend> Scene<N, M> {
     /// Classifies a measured pulse.
     ///
@@ -184,6 +209,51 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         if !ok(m.peak_force_n) || !ok(m.duration_s) {
             return implausible;
         }
+        let point = self.pulse_point(m);
+        let mut lls = [f32::NEG_INFINITY; crate::scene::MAX_CLASSES];
+        let mut class_lls = [f32::NEG_INFINITY; N];
+        let w = self.weigh_classes(&point, &mut lls, &mut class_lls);
+        let s = self.settings();
+        let best_wide = lls
+            .get(w.best as usize)
+            .copied()
+            .unwrap_or(f32::NEG_INFINITY);
+        if w.nearest_d > s.out_sigmas * s.out_sigmas
+            || !w.best_ll.is_finite()
+            || !best_wide.is_finite()
+        {
+            let inv = self.invert(w.nearest, m);
+            let verdict = Verdict::OutOfEnvelope {
+                nearest: w.nearest,
+                radius: inv.map_or(Side::Inside, |v| v.radius_side),
+                speed: inv.map_or(Side::Inside, |v| v.speed_side),
+            };
+            return (verdict, Some(class_lls));
+        }
+        // Posterior of the chosen class by log-sum-exp, on the widened noise.
+        let n = self.envelopes().len();
+        let top = lls.iter().take(n).fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+        let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - top)).sum();
+        let posterior = M::exp(best_wide - top) / sum;
+        let verdict = if posterior >= s.confidence_threshold() {
+            Verdict::Class {
+                class: w.best,
+                posterior,
+            }
+        } else {
+            Verdict::Ambiguous {
+                best: w.best,
+                posterior,
+            }
+        };
+        (verdict, Some(class_lls))
+    }
+
+    /// The Hertz-equivalent measurement `m` as a point `(ln F_max, ln t_c)` with its noise: the
+    /// measurement's sigmas (0 where not finite) in quadrature with `model_sigma`, their
+    /// covariance clamped to `+-sf st`, and that noise widened by the chain's bias at `t_c`.
+    #[inline(always)]
+    fn pulse_point(&self, m: &Measurement) -> PulsePoint {
         let s = self.settings();
         let model2 = s.model_sigma * s.model_sigma;
         let finite_or = |v: f32| if v.is_finite() { v } else { 0.0 };
@@ -198,13 +268,32 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let noise = NoiseXy::new::<M>(sf, st, cov);
         let bias = self.chain_bias().bias_ln_force(lt);
         let wide = noise.with_chain_bias::<M>(bias);
+        PulsePoint {
+            lf,
+            lt,
+            sf,
+            st,
+            cov,
+            noise,
+            bias,
+            wide,
+        }
+    }
 
-        let n = self.envelopes().len();
+    /// Weighs every class at the pulse's point: each class's log-likelihood on the widened
+    /// noise with its prior into `lls` and without into `class_lls`, the nearest envelope in
+    /// sigmas, and the best class chosen on the measurement's own noise.
+    #[inline(always)]
+    fn weigh_classes(
+        &self,
+        p: &PulsePoint,
+        lls: &mut [f32; crate::scene::MAX_CLASSES],
+        class_lls: &mut [f32; N],
+    ) -> Weighed {
+        let (lf, lt) = (p.lf, p.lt);
         let (mut nearest, mut nearest_d) = (0u8, f32::INFINITY);
         let mut best = 0u8;
         let mut best_ll = f32::NEG_INFINITY;
-        let mut lls = [f32::NEG_INFINITY; crate::scene::MAX_CLASSES];
-        let mut class_lls = [f32::NEG_INFINITY; N];
         for (i, (((env, lp), slot), raw)) in self
             .envelopes()
             .iter()
@@ -215,8 +304,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         {
             // A bent class carries the noise through its own map, at the pulse's point.
             let (noise, wide) = env
-                .bent_noise::<M>((lf, lt), (sf, st, cov), bias)
-                .unwrap_or((noise, wide));
+                .bent_noise::<M>((lf, lt), (p.sf, p.st, p.cov), p.bias)
+                .unwrap_or((p.noise, p.wide));
             let d = env.outside_sigmas_squared(lf, lt, wide);
             if d < nearest_d {
                 nearest_d = d;
@@ -236,30 +325,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
                 best = i as u8;
             }
         }
-        let best_wide = lls.get(best as usize).copied().unwrap_or(f32::NEG_INFINITY);
-        if nearest_d > s.out_sigmas * s.out_sigmas || !best_ll.is_finite() || !best_wide.is_finite()
-        {
-            let inv = self.invert(nearest, m);
-            let verdict = Verdict::OutOfEnvelope {
-                nearest,
-                radius: inv.map_or(Side::Inside, |v| v.radius_side),
-                speed: inv.map_or(Side::Inside, |v| v.speed_side),
-            };
-            return (verdict, Some(class_lls));
+        Weighed {
+            nearest,
+            nearest_d,
+            best,
+            best_ll,
         }
-        // Posterior of the chosen class by log-sum-exp, on the widened noise.
-        let top = lls.iter().take(n).fold(f32::NEG_INFINITY, |a, &b| a.max(b));
-        let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - top)).sum();
-        let posterior = M::exp(best_wide - top) / sum;
-        let verdict = if posterior >= s.confidence_threshold() {
-            Verdict::Class {
-                class: best,
-                posterior,
-            }
-        } else {
-            Verdict::Ambiguous { best, posterior }
-        };
-        (verdict, Some(class_lls))
     }
 
     /// The radius and speed class `class` would need for the measured pulse (after

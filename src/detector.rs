@@ -240,6 +240,97 @@ impl Pulse {
             self.top_smooth = self.top_smooth.max(self.ring_sum / w as f32);
         }
     }
+
+    /// Counts raw samples at the ADC's full scale (`adc_max`) and at its low end (`adc_min`),
+    /// and keeps the first two values `v` after the last one at full scale.
+    #[inline(always)]
+    fn track_clipping(&mut self, sample: i32, v: f32, adc_min: i32, adc_max: i32) {
+        if sample >= adc_max {
+            self.saturated = true;
+            self.clipped = self.clipped.saturating_add(1);
+            self.after_clip_count = 0;
+        } else if sample <= adc_min {
+            self.saturated = true;
+            self.low_clip = true;
+        } else if let Some(slot) = self.after_clip.get_mut(self.after_clip_count as usize) {
+            *slot = v;
+            self.after_clip_count += 1;
+        }
+    }
+
+    /// Runs at the largest raw sample (a clipped top is flat in what the ADC gave): the
+    /// current run and the longest.
+    #[inline(always)]
+    fn track_top(&mut self, sample: i32) {
+        if sample > self.top {
+            self.top = sample;
+            self.run = 1;
+            self.flat = 1;
+        } else if sample == self.top {
+            self.run = self.run.saturating_add(1);
+            self.flat = self.flat.max(self.run);
+        } else {
+            self.run = 0;
+        }
+    }
+
+    /// Moments `sum v t^k` (`k = 0..3`) of the part above the trigger, in samples `t` since
+    /// the pulse's start.
+    #[inline(always)]
+    fn track_moments(&mut self, v: f32) {
+        if v > self.trigger {
+            self.above_trigger = self.above_trigger.saturating_add(1);
+            let t = self.samples as f32;
+            let [m0, m1, m2, m3] = &mut self.moments;
+            *m0 += v;
+            *m1 += v * t;
+            *m2 += v * t * t;
+            *m3 += v * t * t * t;
+        }
+    }
+
+    /// The largest value `v` with its index and neighbours (`older`, `last` before it, two
+    /// after it), the valley since, and a second impact: a rise from a deep valley after an
+    /// earlier peak ([`second_peak`]).
+    #[inline(always)]
+    fn track_max(&mut self, v: f32, older: f32, index: u64, noise: f32) {
+        if v > self.max {
+            if self.max > 0.0 && second_peak(self.max, self.valley, v, self.trigger, noise) {
+                self.pileup = true;
+            }
+            self.max = v;
+            self.max_at = index;
+            self.before_max = [older, self.last];
+            self.after_count = 0;
+            self.valley = v;
+        } else {
+            if let Some(slot) = self.after_max.get_mut(self.after_count as usize) {
+                *slot = v;
+                self.after_count += 1;
+            }
+            if v < self.valley {
+                self.valley = v;
+            } else if second_peak(self.max, self.valley, v, self.trigger, noise) {
+                self.pileup = true;
+            }
+        }
+    }
+}
+
+/// The noise model of one measured pulse (natural-log units, per [`Detector::sigmas`]).
+struct Sigmas {
+    /// Standard deviation of `ln F_max`.
+    ln_force: f32,
+    /// Standard deviation of `ln t_c`.
+    ln_duration: f32,
+    /// Noise covariance of `ln sum` and `ln F_max`, `noise^2 weight_sum / (sum F_max)`.
+    shared: f32,
+    /// Standard deviation of `ln sum` from the noise.
+    area: f32,
+    /// The fit's own error of `ln t_c`, `FIT_DURATION n^-2.5`.
+    fit_duration: f32,
+    /// Variance the ringing before the pulse adds to `ln F_max` and `ln sum` together.
+    ring2: f32,
 }
 
 /// The streaming detector, with math backend `M` for the per-pulse fit. Build it from a
@@ -314,6 +405,7 @@ impl<M: Backend> Detector<M> {
         // The equaliser colours and scales the ADC's white noise by its noise gain.
         let noise = sensor.noise_rms_counts * scene.equaliser().noise_gain();
         let adc_noisy = sensor.noise_rms_counts >= 1.0;
+        let (ring_weight, ring_decay) = Self::ring_weights(scene.equaliser().is_identity(), fs);
         Self {
             trigger: (s.trigger_sigmas * noise).max(2.0),
             release: (s.release_sigmas * noise).max(1.0),
@@ -334,16 +426,8 @@ impl<M: Backend> Detector<M> {
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
             stuck_limit: if adc_noisy { s.stuck_samples } else { 0 },
             adc_noisy,
-            ring_weight: if scene.equaliser().is_identity() {
-                0.0
-            } else {
-                1.0 - M::exp(-1.0 / (RING_TAU_S * fs))
-            },
-            ring_decay: if scene.equaliser().is_identity() {
-                0.0
-            } else {
-                M::exp(-1.0 / (RING_TAU_S * fs))
-            },
+            ring_weight,
+            ring_decay,
             ring_sum: 0.0,
             adc_min: sensor.adc_min,
             adc_max: sensor.adc_max,
@@ -360,6 +444,18 @@ impl<M: Backend> Detector<M> {
             pulse: Pulse::EMPTY,
             next_index: 0,
             backend: M::default(),
+        }
+    }
+
+    /// The quiet mean square's weight per sample and decay, `(1 - d, d)` with
+    /// `d = exp(-1 / (RING_TAU_S fs))` for `fs` in Hz; `(0, 0)` (not tracked) behind a rigid
+    /// chain (`identity`).
+    fn ring_weights(identity: bool, fs: f32) -> (f32, f32) {
+        if identity {
+            (0.0, 0.0)
+        } else {
+            let decay = M::exp(-1.0 / (RING_TAU_S * fs));
+            (1.0 - decay, decay)
         }
     }
 
@@ -795,59 +891,10 @@ impl<M: Backend> Detector<M> {
         // Second difference at the previous sample.
         p.min_curvature = p.min_curvature.min(p.prev + v - 2.0 * p.last);
         p.prev = p.last;
-        if sample >= self.adc_max {
-            p.saturated = true;
-            p.clipped = p.clipped.saturating_add(1);
-            p.after_clip_count = 0;
-        } else if sample <= self.adc_min {
-            p.saturated = true;
-            p.low_clip = true;
-        } else if let Some(slot) = p.after_clip.get_mut(p.after_clip_count as usize) {
-            *slot = v;
-            p.after_clip_count += 1;
-        }
-        // Runs at the largest raw sample (a clipped top is flat in what the ADC gave).
-        if sample > p.top {
-            p.top = sample;
-            p.run = 1;
-            p.flat = 1;
-        } else if sample == p.top {
-            p.run = p.run.saturating_add(1);
-            p.flat = p.flat.max(p.run);
-        } else {
-            p.run = 0;
-        }
-        if v > p.trigger {
-            p.above_trigger = p.above_trigger.saturating_add(1);
-            // Moments of the part above the trigger, in samples since the pulse's start.
-            let t = p.samples as f32;
-            let [m0, m1, m2, m3] = &mut p.moments;
-            *m0 += v;
-            *m1 += v * t;
-            *m2 += v * t * t;
-            *m3 += v * t * t * t;
-        }
-        if v > p.max {
-            // A rise from a deep valley after an earlier peak is a second impact.
-            if p.max > 0.0 && second_peak(p.max, p.valley, v, p.trigger, self.noise) {
-                p.pileup = true;
-            }
-            p.max = v;
-            p.max_at = index;
-            p.before_max = [older, p.last];
-            p.after_count = 0;
-            p.valley = v;
-        } else {
-            if let Some(slot) = p.after_max.get_mut(p.after_count as usize) {
-                *slot = v;
-                p.after_count += 1;
-            }
-            if v < p.valley {
-                p.valley = v;
-            } else if second_peak(p.max, p.valley, v, p.trigger, self.noise) {
-                p.pileup = true;
-            }
-        }
+        p.track_clipping(sample, v, self.adc_min, self.adc_max);
+        p.track_top(sample);
+        p.track_moments(v);
+        p.track_max(v, older, index, self.noise);
         p.last = v;
         if v <= p.release {
             p.below_release = p.below_release.saturating_add(1);
@@ -916,26 +963,83 @@ impl<M: Backend> Detector<M> {
         if p.saturated {
             return self.measure_clipped();
         }
-        let [before2, before] = p.before_max;
-        let [after, after2] = p.after_max;
+        if let Some(r) = self.flaw_before_fit() {
+            return reject(r);
+        }
+        let Some(PeakFit {
+            peak,
+            duration,
+            gain2,
+            weight_sum,
+        }) = self.fit_top()
+        else {
+            return reject(RejectReason::Implausible);
+        };
+        // The fit reads the area with the Hertz shape; the contact's own pulse may be flatter.
+        #[cfg(feature = "plasticity")]
+        let duration = duration / self.area_ratio;
+        if let Some(r) = self.flaw_of_top(peak, duration) {
+            return reject(r);
+        }
+        let sigmas = self.sigmas(peak, duration, gain2, weight_sum);
+        // Shorter than the fit can measure, even allowing three sigma for noise.
+        if duration * (1.0 + 3.0 * sigmas.ln_duration) < MIN_DURATION_SAMPLES {
+            return reject(RejectReason::TooShort);
+        }
+        if !self.shape_ok(peak, &sigmas) || !self.symmetric_enough(peak) {
+            return reject(RejectReason::Misshapen);
+        }
+        let ([_, before], [after, _]) = (p.before_max, p.after_max);
+        Detection::Pulse {
+            at_sample,
+            outcome: Ok(Measurement {
+                peak_force_n: peak * self.force_per_count_n,
+                duration_s: duration * self.dt_s,
+                sigma_ln_force: sigmas.ln_force,
+                sigma_ln_duration: sigmas.ln_duration,
+                cov_ln: sigmas.shared - sigmas.ln_force * sigmas.ln_force,
+                asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
+            }),
+        }
+    }
+
+    /// Why the finished, unclipped pulse cannot be measured before any fit: a lone sample
+    /// above the trigger with low neighbours (`Spike`), a gap, a second impact, or a drifting
+    /// baseline; `None` when none of these.
+    #[inline(always)]
+    fn flaw_before_fit(&self) -> Option<RejectReason> {
+        let p = &self.pulse;
+        let [_, before] = p.before_max;
+        let [after, _] = p.after_max;
         let neighbour = if p.after_count > 0 {
             before.max(after)
         } else {
             before
         };
         if p.above_trigger <= 1 && neighbour < 0.2 * p.max {
-            return reject(RejectReason::Spike);
+            return Some(RejectReason::Spike);
         }
         if p.after_gap {
-            return reject(RejectReason::Gap);
+            return Some(RejectReason::Gap);
         }
         if p.pileup {
-            return reject(RejectReason::PileUp);
+            return Some(RejectReason::PileUp);
         }
         if p.drift {
-            return reject(RejectReason::Drift);
+            return Some(RejectReason::Drift);
         }
-        let fit = if self.smooth > 1 {
+        None
+    }
+
+    /// Peak (counts) and duration (samples) of the pulse's top: [`smooth_fit`] of the largest
+    /// mean of `smooth` samples for a long pulse, else [`peak_fit`] of the five samples about
+    /// the largest; `None` when they are not a positive pulse.
+    #[inline(always)]
+    fn fit_top(&self) -> Option<PeakFit> {
+        let p = &self.pulse;
+        let [before2, before] = p.before_max;
+        let [after, after2] = p.after_max;
+        if self.smooth > 1 {
             smooth_fit(p.top_smooth, self.smooth, p.sum).map(|(peak, duration)| PeakFit {
                 peak,
                 duration,
@@ -944,19 +1048,14 @@ impl<M: Backend> Detector<M> {
             })
         } else {
             peak_fit::<M>([before2, before, p.max, after, after2], p.sum, self.hertz)
-        };
-        let Some(PeakFit {
-            peak,
-            duration,
-            gain2,
-            weight_sum,
-        }) = fit
-        else {
-            return reject(RejectReason::Implausible);
-        };
-        // The fit reads the area with the Hertz shape; the contact's own pulse may be flatter.
-        #[cfg(feature = "plasticity")]
-        let duration = duration / self.area_ratio;
+        }
+    }
+
+    /// Why a fitted top of `peak` counts and `duration` samples is not a pulse's: a flat
+    /// (clipped) top, `Saturated`, or a bend sharper than the Hertz pulse's, `Spike`.
+    #[inline(always)]
+    fn flaw_of_top(&self, peak: f32, duration: f32) -> Option<RejectReason> {
+        let p = &self.pulse;
         // A clipped top: a run of identical samples at the maximum, longer than noise makes by
         // chance and than a long pulse's own flat top (`duration / 20` samples).
         // A contact with a broader top than Hertz's (a yielding one) allows that much more.
@@ -964,14 +1063,23 @@ impl<M: Backend> Detector<M> {
         #[cfg(feature = "plasticity")]
         let flat_limit = flat_limit * self.flat_top_ratio;
         if self.adc_noisy && p.flat as f32 >= flat_limit {
-            return reject(RejectReason::Saturated);
+            return Some(RejectReason::Saturated);
         }
         // The sharpest bend a Hertz pulse of this peak and duration has (see the module docs).
         let bend =
             1.65 * core::f32::consts::PI * core::f32::consts::PI * peak / (duration * duration);
         if p.min_curvature < -(2.0 * bend + self.spike_fraction * peak + 8.0 * self.noise) {
-            return reject(RejectReason::Spike);
+            return Some(RejectReason::Spike);
         }
+        None
+    }
+
+    /// The noise model of a fitted pulse of `peak` counts and `duration` samples, whose fit
+    /// has noise gain `gain2` and shares `weight_sum` samples with the sum: the fit's own
+    /// error, the noise, and the ringing seen before the pulse (see [`Sigmas`]).
+    #[inline(always)]
+    fn sigmas(&self, peak: f32, duration: f32, gain2: f32, weight_sum: f32) -> Sigmas {
+        let p = &self.pulse;
         let n = p.samples as f32;
         // Sampling: the fit's own error falls as `duration^-2.5`; its worst over the sample's
         // phase, measured at 3 to 400 samples per pulse (tests/detector.rs,
@@ -994,43 +1102,41 @@ impl<M: Backend> Detector<M> {
             1.5 * p.excess * n / p.sum.max(f32::MIN_POSITIVE),
         );
         let ring2 = ring_force * ring_force + ring_area * ring_area;
-        let sigma_ln_force =
+        let ln_force =
             M::sqrt(noise_force * noise_force + fit_force * fit_force + ring_force * ring_force);
         // `ln t_c = ln sum - ln F_max`: the variance of the difference of the two.
-        let sigma_ln_duration = M::sqrt(
+        let ln_duration = M::sqrt(
             (sigma_area * sigma_area + noise_force * noise_force - 2.0 * shared).max(0.0)
                 + fit_duration * fit_duration
                 + ring2,
         );
-        // Shorter than the fit can measure, even allowing three sigma for noise.
-        if duration * (1.0 + 3.0 * sigma_ln_duration) < MIN_DURATION_SAMPLES {
-            return reject(RejectReason::TooShort);
+        Sigmas {
+            ln_force,
+            ln_duration,
+            shared,
+            area: sigma_area,
+            fit_duration,
+            ring2,
         }
+    }
+
+    /// Whether the pulse's energy and area agree with the contact's shape for a fitted `peak`
+    /// (counts): `|ln q| <= shape_tolerance + 4 sigma_q` (see the module docs).
+    #[inline(always)]
+    fn shape_ok(&self, peak: f32, s: &Sigmas) -> bool {
+        let p = &self.pulse;
+        let n = p.samples as f32;
         let energy = p.sum_sq - n * self.noise * self.noise;
         let q = (energy * C_AREA) / (p.sum * peak * C_ENERGY * self.shape_ratio);
         let sigma_energy = 2.0 * self.noise / M::sqrt(energy.max(f32::MIN_POSITIVE));
         let sigma_q = M::sqrt(
             sigma_energy * sigma_energy
-                + sigma_area * sigma_area
-                + sigma_ln_force * sigma_ln_force
-                + fit_duration * fit_duration
-                + ring2,
+                + s.area * s.area
+                + s.ln_force * s.ln_force
+                + s.fit_duration * s.fit_duration
+                + s.ring2,
         );
-        let shape_ok = q > 0.0 && M::ln(q).abs() <= self.shape_tolerance + 4.0 * sigma_q;
-        if !shape_ok || !self.symmetric_enough(peak) {
-            return reject(RejectReason::Misshapen);
-        }
-        Detection::Pulse {
-            at_sample,
-            outcome: Ok(Measurement {
-                peak_force_n: peak * self.force_per_count_n,
-                duration_s: duration * self.dt_s,
-                sigma_ln_force,
-                sigma_ln_duration,
-                cov_ln: shared - sigma_ln_force * sigma_ln_force,
-                asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
-            }),
-        }
+        q > 0.0 && M::ln(q).abs() <= self.shape_tolerance + 4.0 * sigma_q
     }
 
     /// A pulse with samples at the ADC's full scale, measured from its unclipped flanks

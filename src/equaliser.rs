@@ -588,8 +588,16 @@ fn beam_zeros<M: Backend>(modes: &[BeamMode]) -> Result<[C; MAX_MODES], Error> {
     }
     let norm = norm.get(..modes.len()).unwrap_or(&[]);
     let count = 2 * modes.len();
-    // Starting points: each mode's zero if it were alone, `w / sqrt(1 + g)`, a little off
-    // the axis and turned so that no two coincide.
+    let mut roots = starting_roots::<M>(norm);
+    let roots_used = roots.get_mut(..count).unwrap_or(&mut []);
+    polish_roots(norm, roots_used)?;
+    zeros_by_mode::<M>(norm, roots_used, w_ref)
+}
+
+/// Starting points for the beam stage's zeros of the normalised modes `norm`
+/// (`(w / w_ref, zeta, g)`): each mode's zero if it were alone, `w / sqrt(1 + g)`, a little off
+/// the axis and turned so that no two coincide; two per mode, conjugate.
+fn starting_roots<M: Backend>(norm: &[(f32, f32, f32)]) -> [C; 2 * MAX_MODES] {
     let mut roots = [C::default(); 2 * MAX_MODES];
     for (k, (w, z, g)) in norm.iter().enumerate() {
         let wz = *w / M::sqrt(1.0 + g.max(-0.9));
@@ -601,17 +609,23 @@ fn beam_zeros<M: Backend>(modes: &[BeamMode]) -> Result<[C; MAX_MODES], Error> {
             *r = C::new(-z * wz / tilt - 0.02, -wz);
         }
     }
-    let roots_used = roots.get_mut(..count).unwrap_or(&mut []);
-    let mut converged = false;
+    roots
+}
+
+/// Newton's steps with the other roots deflated (Aberth-Ehrlich) on all `roots` of the beam
+/// stage's numerator at once, until no relative step exceeds 1e-6 (squared: 1e-12), at most
+/// `ROOT_ITERATIONS` rounds; `NotConverged` otherwise or on a non-finite step.
+fn polish_roots(norm: &[(f32, f32, f32)], roots: &mut [C]) -> Result<(), Error> {
+    let count = roots.len();
     for _ in 0..ROOT_ITERATIONS {
         let mut largest_step = 0.0f32;
         for k in 0..count {
-            let Some(sk) = roots_used.get(k).copied() else {
+            let Some(sk) = roots.get(k).copied() else {
                 continue;
             };
             let ratio = newton_ratio(norm, sk);
             let mut repel = C::default();
-            for (m, sm) in roots_used.iter().enumerate() {
+            for (m, sm) in roots.iter().enumerate() {
                 if m != k {
                     repel = repel.add(C::new(1.0, 0.0).div(sk.sub(*sm)));
                 }
@@ -621,24 +635,30 @@ fn beam_zeros<M: Backend>(modes: &[BeamMode]) -> Result<[C; MAX_MODES], Error> {
                 return Err(chain(ChainStage::Beam, ChainFault::NotConverged));
             }
             largest_step = largest_step.max(step.norm2() / sk.norm2().max(1e-12));
-            if let Some(r) = roots_used.get_mut(k) {
+            if let Some(r) = roots.get_mut(k) {
                 *r = sk.sub(step);
             }
         }
         if largest_step < 1e-12 {
-            converged = true;
-            break;
+            return Ok(());
         }
     }
-    if !converged {
-        return Err(chain(ChainStage::Beam, ChainFault::NotConverged));
-    }
+    Err(chain(ChainStage::Beam, ChainFault::NotConverged))
+}
+
+/// For each normalised mode of `norm`, in order, the unused root of non-negative imaginary
+/// part nearest its frequency, scaled back by `w_ref` (rad/s); `NonMinimumPhase` when a root
+/// has a non-negative real part, `NotConverged` when a mode finds none.
+fn zeros_by_mode<M: Backend>(
+    norm: &[(f32, f32, f32)],
+    roots: &[C],
+    w_ref: f32,
+) -> Result<[C; MAX_MODES], Error> {
     let mut out = [C::default(); MAX_MODES];
     let mut used = [false; 2 * MAX_MODES];
     for (slot, (w, _, _)) in out.iter_mut().zip(norm) {
-        // The unused root of non-negative imaginary part nearest this mode's frequency.
         let mut best: Option<(usize, f32)> = None;
-        for (k, r) in roots_used.iter().enumerate() {
+        for (k, r) in roots.iter().enumerate() {
             if r.re >= 0.0 {
                 return Err(chain(ChainStage::Beam, ChainFault::NonMinimumPhase));
             }
@@ -652,7 +672,7 @@ fn beam_zeros<M: Backend>(modes: &[BeamMode]) -> Result<[C; MAX_MODES], Error> {
         if let Some(u) = used.get_mut(k) {
             *u = true;
         }
-        *slot = roots_used.get(k).copied().unwrap_or_default().scale(w_ref);
+        *slot = roots.get(k).copied().unwrap_or_default().scale(w_ref);
     }
     Ok(out)
 }
@@ -934,6 +954,30 @@ fn fir(taps: &[f32; 5], history: &mut [f32; 4], x: f32) -> f32 {
     c0 * x + c1 * h1 + c2 * h2 + c3 * h3 + c4 * h4
 }
 
+/// What [`Pairs::each`] did, from the `count` raw samples it `fed` and the one that `stop`ped
+/// it: the first and last fed, and the repeated raw samples, counted here once per call rather
+/// than in the loop.
+#[inline(always)]
+fn fed_of<S: Copy + Into<i32>>(count: usize, fed: &[S], stop: Option<(i32, f32)>) -> Fed {
+    let repeats = fed
+        .windows(2)
+        .rev()
+        .take_while(|w| match w {
+            [a, b] => (*a).into() == (*b).into(),
+            _ => false,
+        })
+        .count();
+    Fed {
+        count,
+        stop,
+        ends: fed
+            .first()
+            .zip(fed.last())
+            .map(|(&a, &b)| (a.into(), b.into())),
+        repeats,
+    }
+}
+
 /// The coefficients and the sections' states of a [`Run`].
 struct Filter<const K: usize> {
     base: f32,
@@ -1009,25 +1053,7 @@ impl<S: Copy + Into<i32>, const K: usize> Pairs for Run<'_, S, K> {
             filter.history_after(*history, taken)
         };
         self.raw = raw.get(taken.len()..).unwrap_or(&[]);
-        // Repeated raw samples, counted here once per call rather than in the loop.
-        let fed = raw.get(..count).unwrap_or(&[]);
-        let repeats = fed
-            .windows(2)
-            .rev()
-            .take_while(|w| match w {
-                [a, b] => (*a).into() == (*b).into(),
-                _ => false,
-            })
-            .count();
-        Fed {
-            count,
-            stop,
-            ends: fed
-                .first()
-                .zip(fed.last())
-                .map(|(&a, &b)| (a.into(), b.into())),
-            repeats,
-        }
+        fed_of(count, raw.get(..count).unwrap_or(&[]), stop)
     }
 
     #[inline(always)]

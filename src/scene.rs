@@ -425,12 +425,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         sensor.check()?;
         settings.check()?;
         let equaliser = sensor.dynamics.equaliser_at(sensor.sample_rate_hz)?;
-        if classes.len() < 2 {
-            return Err(Error::TooFewClasses);
-        }
-        if classes.len() > N || classes.len() > MAX_CLASSES {
-            return Err(Error::TooManyClasses);
-        }
+        class_count_fits(classes.len(), N)?;
         let mut envelopes = Vec::new();
         let mut ln_priors = Vec::new();
         let mut stored = Vec::new();
@@ -438,53 +433,16 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let mut longest = 0.0f32;
         for (i, c) in classes.iter().enumerate() {
             let table = maps.get(i).copied().flatten();
-            let e_eff = effective_modulus_pa(&c.material, &plate)?;
-            let (speed, beta) = match c.speed {
-                Speed::Uniform(r) => (r.checked("speed_m_s")?, 1.0),
-                Speed::DropHeight(h) => {
-                    let h = h.checked("drop_height_m")?;
-                    (
-                        Range::new(
-                            hertz::drop_speed_in::<M>(h.min)?,
-                            hertz::drop_speed_in::<M>(h.max)?,
-                        ),
-                        2.0,
-                    )
-                }
-            };
-            let rho = c.material.density_kg_m3;
-            let mut env = Envelope::new::<M>(e_eff, rho, c.radius_m, speed, beta)?;
-            // Shortest pulse: smallest radius, highest speed; longest: the opposite.
-            let mut short =
-                hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
-            let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
-            if c.yield_pressure_pa.is_some() || table.is_some() {
-                env = bend::<M>(env, c, table, e_eff, rho)?;
-                // A bent duration's extremes need not be Hertz's corners: all four are taken.
-                let ln_t = env.corners().map(|(x, y)| env.forward(x, y).1);
-                short = M::exp(ln_t.iter().fold(f32::INFINITY, |a, &b| a.min(b)));
-                long = M::exp(ln_t.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)));
-            }
+            let (short, long) = Self::push_envelope(&plate, c, table, &mut envelopes)?;
             shortest = shortest.min(short);
             longest = longest.max(long);
             let prior = positive(c.prior, "prior")?;
             // Capacity was checked above: these pushes cannot fail.
-            let _ = envelopes.push(env);
             let _ = ln_priors.push(M::ln(prior));
             let _ = stored.push(c.clone());
         }
-        // Priors relative to the largest, so that exp(ln prior) stays in (0, 1] whatever their
-        // scale (1e-30 or 1e30 alike).
-        let top = ln_priors.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
-        for lp in ln_priors.iter_mut() {
-            *lp -= top;
-        }
-        if shortest * sensor.sample_rate_hz < MIN_DURATION_SAMPLES {
-            return Err(Error::OutOfRange(
-                "sample_rate_hz (shortest pulse < 2.5 samples)",
-            ));
-        }
-        representable(longest * sensor.sample_rate_hz, "longest pulse in samples")?;
+        relative_to_largest(&mut ln_priors);
+        durations_measurable(shortest, longest, sensor.sample_rate_hz)?;
         let chain_bias =
             ChainBias::new::<M>(&sensor.dynamics, sensor.sample_rate_hz, shortest, longest);
         let mut scene = Self {
@@ -511,6 +469,47 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         }
         scene.separability = scene.integrate_separability();
         Ok(scene)
+    }
+
+    /// Pushes class `c`'s envelope on `plate` (bent by its yield or its ratio map `table`, if
+    /// any) onto `envelopes` (which has room: the class count was checked), and returns its
+    /// shortest and longest pulse (s): Hertz's corners (smallest radius and highest speed; the
+    /// opposite), or for a bent envelope the extremes of its four corners.
+    #[inline(never)]
+    fn push_envelope(
+        plate: &Material,
+        c: &ParticleClass,
+        table: Option<RatioMap>,
+        envelopes: &mut Vec<Envelope, N>,
+    ) -> Result<(f32, f32), Error> {
+        let e_eff = effective_modulus_pa(&c.material, plate)?;
+        let (speed, beta) = match c.speed {
+            Speed::Uniform(r) => (r.checked("speed_m_s")?, 1.0),
+            Speed::DropHeight(h) => {
+                let h = h.checked("drop_height_m")?;
+                (
+                    Range::new(
+                        hertz::drop_speed_in::<M>(h.min)?,
+                        hertz::drop_speed_in::<M>(h.max)?,
+                    ),
+                    2.0,
+                )
+            }
+        };
+        let rho = c.material.density_kg_m3;
+        let mut env = Envelope::new::<M>(e_eff, rho, c.radius_m, speed, beta)?;
+        // Shortest pulse: smallest radius, highest speed; longest: the opposite.
+        let mut short = hertz::impact_in::<M>(e_eff, rho, c.radius_m.min, speed.max)?.duration_s;
+        let mut long = hertz::impact_in::<M>(e_eff, rho, c.radius_m.max, speed.min)?.duration_s;
+        if c.yield_pressure_pa.is_some() || table.is_some() {
+            env = bend::<M>(env, c, table, e_eff, rho)?;
+            // A bent duration's extremes need not be Hertz's corners: all four are taken.
+            let ln_t = env.corners().map(|(x, y)| env.forward(x, y).1);
+            short = M::exp(ln_t.iter().fold(f32::INFINITY, |a, &b| a.min(b)));
+            long = M::exp(ln_t.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)));
+        }
+        let _ = envelopes.push(env);
+        Ok((short, long))
     }
 
     /// The plate material.
@@ -724,6 +723,39 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         }
         next
     }
+}
+
+/// Between 2 and `min(n, MAX_CLASSES)` classes (`count`): `TooFewClasses` or
+/// `TooManyClasses` otherwise.
+fn class_count_fits(count: usize, n: usize) -> Result<(), Error> {
+    if count < 2 {
+        return Err(Error::TooFewClasses);
+    }
+    if count > n || count > MAX_CLASSES {
+        return Err(Error::TooManyClasses);
+    }
+    Ok(())
+}
+
+/// Log priors made relative to the largest, so that exp(ln prior) stays in (0, 1] whatever
+/// their scale (1e-30 or 1e30 alike).
+fn relative_to_largest(ln_priors: &mut [f32]) {
+    let top = ln_priors.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+    for lp in ln_priors.iter_mut() {
+        *lp -= top;
+    }
+}
+
+/// The scene's shortest pulse (s) spans at least [`MIN_DURATION_SAMPLES`] at `sample_rate_hz`
+/// and its longest a number of samples f32 carries; `OutOfRange` otherwise.
+fn durations_measurable(shortest_s: f32, longest_s: f32, sample_rate_hz: f32) -> Result<(), Error> {
+    if shortest_s * sample_rate_hz < MIN_DURATION_SAMPLES {
+        return Err(Error::OutOfRange(
+            "sample_rate_hz (shortest pulse < 2.5 samples)",
+        ));
+    }
+    representable(longest_s * sample_rate_hz, "longest pulse in samples")?;
+    Ok(())
 }
 
 /// The envelope `env` of class `c` bent by its ratio map `table`, if it has one

@@ -458,68 +458,24 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     if scene.contact == LawSpec::Hertz && !scene.yields() {
         return Ok(None);
     }
-    let plate = scene.plate.material();
-    let mut all = Vec::new();
-    let mut skews = Vec::new();
-    let mut bend = 0.0f64;
-    let mut sampled = 0.0f64;
-    let mut pulses = Vec::new();
-    let mut shortest_s = f64::INFINITY;
-    let mut ln_area_ratio = 0.0f64;
-    let mut ln_top = 0.0f64;
-    for (i, class) in scene.classes.iter().enumerate() {
-        let (r, u) = (class.radius_m, class.speed_range_m_s());
-        for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
-            for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
-                let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
-                spec.law = scene.class_law(i)?;
-                let Pulse64 {
-                    ratios,
-                    series,
-                    area_ratio,
-                    top_fraction,
-                    peak_n,
-                    area_duration_s,
-                } = pulse_ratios_and_series(&spec)?;
-                ln_area_ratio += area_ratio.ln();
-                ln_top += (top_fraction / hertz_top_fraction()).ln();
-                shortest_s = shortest_s.min(spec.hertz()?.duration_s);
-                pulses.push((peak_n, area_duration_s));
-                bend = bend.max(sharpest_bend(&series, scene.sensor.sample_rate_hz));
-                skews.push(skewness(&series, 0.005));
-                sampled = sampled.max(sampled_shape_spread(&series, scene.sensor.sample_rate_hz));
-                all.push((ratios, series));
-            }
-        }
-    }
+    let GridPulses {
+        all,
+        skews,
+        bend,
+        sampled,
+        pulses,
+        shortest_s,
+        ln_area_ratio,
+        ln_top,
+    } = integrate_grid(scene)?;
     let fs = scene.sensor.sample_rate_hz;
-    let sampled_fit = (shortest_s * fs < SMOOTH_FROM_SAMPLES).then(|| {
-        let continuous: Vec<ContinuousPulse> = all
-            .iter()
-            .zip(&pulses)
-            .map(|((_, series), &(peak_n, duration_s))| ContinuousPulse {
-                series,
-                peak_n,
-                duration_s,
-            })
-            .collect();
-        let phase = (scene.contact != LawSpec::Hertz).then(|| phase_calibration(&continuous));
-        (sampled_calibration(&continuous), phase)
-    });
+    let damped = scene.contact != LawSpec::Hertz;
+    let sampled_fit =
+        (shortest_s * fs < SMOOTH_FROM_SAMPLES).then(|| sampled_of_grid(&all, &pulses, damped));
     let (sampled_fit, phase) = sampled_fit.map_or((None, None), |(s, p)| (Some(s), p));
     let n = all.len() as f64;
     let skew_mean = skews.iter().sum::<f64>() / n;
-    let trigger_sigmas = f64::from(scene.settings.trigger_sigmas);
-    let check = SkewCheck {
-        trigger_counts: (trigger_sigmas * scene.sensor.noise_rms_counts).max(2.0),
-        noise_counts: scene.sensor.noise_rms_counts,
-        counts_per_n: scene.sensor.counts_per_m_s2 / scene.sensor.effective_mass_kg,
-        sample_rate_hz: fs,
-    };
-    let cut_excess = all
-        .iter()
-        .map(|(_, series)| skewness_cut_excess(series, skew_mean, &check))
-        .fold(0.0, f64::max);
+    let cut_excess = grid_cut_excess(scene, &all, skew_mean);
     let all: Vec<PulseRatios> = all.into_iter().map(|(r, _)| r).collect();
     let mean = |f: fn(&PulseRatios) -> f64| all.iter().map(|p| f(p).ln()).sum::<f64>() / n;
     let (lf, ld, ls) = (mean(|p| p.force), mean(|p| p.duration), mean(|p| p.shape));
@@ -553,6 +509,102 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         area_ratio: (ln_area_ratio / n).exp(),
         flat_top_ratio: (ln_top / n).exp(),
     }))
+}
+
+/// What [`integrate_grid`] gathers from a scene's impacts, in grid order.
+struct GridPulses {
+    /// Each impact's ratios and force-time series `(t_s, force_n)`.
+    all: Vec<(PulseRatios, Vec<(f64, f64)>)>,
+    /// Each impact's skewness ([`skewness`] above 0.5 % of the peak).
+    skews: Vec<f64>,
+    /// The sharpest bend of any pulse ([`sharpest_bend`]).
+    bend: f64,
+    /// The largest [`sampled_shape_spread`] of any pulse.
+    sampled: f64,
+    /// Each impact's peak force (N) and duration from the area (s).
+    pulses: Vec<(f64, f64)>,
+    /// The shortest Hertz contact time of the grid (s).
+    shortest_s: f64,
+    /// Sums over the impacts of `ln area_ratio` and of `ln (top_fraction / Hertz's)`.
+    ln_area_ratio: f64,
+    ln_top: f64,
+}
+
+/// Integrates each class of `scene`, with its own law ([`SceneFile::class_law`]), at radius
+/// {min, geometric centre, max} x speed {min, centre, max}, and gathers what [`calibrate`]
+/// needs of each pulse.
+fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
+    let plate = scene.plate.material();
+    let mut g = GridPulses {
+        all: Vec::new(),
+        skews: Vec::new(),
+        bend: 0.0,
+        sampled: 0.0,
+        pulses: Vec::new(),
+        shortest_s: f64::INFINITY,
+        ln_area_ratio: 0.0,
+        ln_top: 0.0,
+    };
+    let fs = scene.sensor.sample_rate_hz;
+    for (i, class) in scene.classes.iter().enumerate() {
+        let (r, u) = (class.radius_m, class.speed_range_m_s());
+        for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
+            for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
+                let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
+                spec.law = scene.class_law(i)?;
+                let p = pulse_ratios_and_series(&spec)?;
+                g.ln_area_ratio += p.area_ratio.ln();
+                g.ln_top += (p.top_fraction / hertz_top_fraction()).ln();
+                g.shortest_s = g.shortest_s.min(spec.hertz()?.duration_s);
+                g.pulses.push((p.peak_n, p.area_duration_s));
+                g.bend = g.bend.max(sharpest_bend(&p.series, fs));
+                g.skews.push(skewness(&p.series, 0.005));
+                g.sampled = g.sampled.max(sampled_shape_spread(&p.series, fs));
+                g.all.push((p.ratios, p.series));
+            }
+        }
+    }
+    Ok(g)
+}
+
+/// [`sampled_calibration`] of the grid's pulses: their series (`all`) with their peak force
+/// (N) and duration from the area (s) (`pulses`); for a damped contact (`damped`) also the
+/// correction by samples per pulse and sampling phase ([`phase_calibration`]).
+fn sampled_of_grid(
+    all: &[(PulseRatios, Vec<(f64, f64)>)],
+    pulses: &[(f64, f64)],
+    damped: bool,
+) -> (Sampled64, Option<Phase64>) {
+    let continuous: Vec<ContinuousPulse> = all
+        .iter()
+        .zip(pulses)
+        .map(|((_, series), &(peak_n, duration_s))| ContinuousPulse {
+            series,
+            peak_n,
+            duration_s,
+        })
+        .collect();
+    let phase = damped.then(|| phase_calibration(&continuous));
+    (sampled_calibration(&continuous), phase)
+}
+
+/// The largest [`skewness_cut_excess`] of the grid's pulses (`all`) about `skew_mean`, at
+/// `scene`'s trigger level, noise, gain and sample rate.
+fn grid_cut_excess(
+    scene: &SceneFile,
+    all: &[(PulseRatios, Vec<(f64, f64)>)],
+    skew_mean: f64,
+) -> f64 {
+    let trigger_sigmas = f64::from(scene.settings.trigger_sigmas);
+    let check = SkewCheck {
+        trigger_counts: (trigger_sigmas * scene.sensor.noise_rms_counts).max(2.0),
+        noise_counts: scene.sensor.noise_rms_counts,
+        counts_per_n: scene.sensor.counts_per_m_s2 / scene.sensor.effective_mass_kg,
+        sample_rate_hz: scene.sensor.sample_rate_hz,
+    };
+    all.iter()
+        .map(|(_, series)| skewness_cut_excess(series, skew_mean, &check))
+        .fold(0.0, f64::max)
 }
 
 /// Samples in the shortest pulse the kernel's detector measures in `scene`: the shortest Hertz

@@ -344,21 +344,7 @@ pub fn run_batch(
         .headers()
         .context("cannot read the batch header")?
         .clone();
-    let mut map = Vec::with_capacity(head.len());
-    for name in head.iter() {
-        let norm = name.trim().to_ascii_lowercase().replace('-', "_");
-        let found = INPUT_COLUMNS
-            .iter()
-            .position(|c| *c == norm)
-            .or_else(|| ECHO_COLUMNS.iter().position(|c| *c == norm));
-        match found {
-            Some(i) => map.push(i),
-            None => bail!(
-                "unknown batch column {name:?}; accepted: {}",
-                INPUT_COLUMNS.join(", ")
-            ),
-        }
-    }
+    let map = column_map(&head)?;
     let base = InputRow::from_args(defaults);
     let mut writer = csv::Writer::from_writer(output);
     writer.write_record(header())?;
@@ -395,6 +381,27 @@ pub fn run_batch(
     }
     writer.flush()?;
     Ok(summary)
+}
+
+/// The input column of each batch header cell (names case-blind, `-` read as `_`; the echoed
+/// columns accepted too); an unknown name is an error that lists the accepted ones.
+fn column_map(head: &csv::StringRecord) -> anyhow::Result<Vec<usize>> {
+    let mut map = Vec::with_capacity(head.len());
+    for name in head.iter() {
+        let norm = name.trim().to_ascii_lowercase().replace('-', "_");
+        let found = INPUT_COLUMNS
+            .iter()
+            .position(|c| *c == norm)
+            .or_else(|| ECHO_COLUMNS.iter().position(|c| *c == norm));
+        match found {
+            Some(i) => map.push(i),
+            None => bail!(
+                "unknown batch column {name:?}; accepted: {}",
+                INPUT_COLUMNS.join(", ")
+            ),
+        }
+    }
+    Ok(map)
 }
 
 fn open_output(path: Option<&Path>) -> anyhow::Result<Box<dyn Write>> {

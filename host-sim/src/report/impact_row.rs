@@ -468,49 +468,13 @@ impl InputRow {
     /// The law's specification, its restitution, `c_max` and depth checked.
     fn law(&self, name: LawName, echo: &mut InputRow) -> Result<LawSpec, String> {
         let restitution = self.num("restitution")?;
-        let in_range = |e: f64, top_open: bool| {
-            let ok = e > 0.0 && if top_open { e < 1.0 } else { e <= 1.0 };
-            if ok {
-                Ok(e)
-            } else {
-                let top = if top_open { "1)" } else { "1]" };
-                Err(format!(
-                    "restitution = {}: must be in (0, {top} for law {}",
-                    fmt_f64(e),
-                    name.as_str()
-                ))
-            }
-        };
         let need_e = || match restitution {
-            Some(e) => in_range(e, false),
+            Some(e) => restitution_in_range(e, false, name),
             None => Err(format!("law {} needs restitution", name.as_str())),
         };
         Ok(match name {
             LawName::Hertz => LawSpec::Hertz,
-            LawName::Adams => {
-                let d_m = self.positive("depth", "m")?.unwrap_or(DEFAULT_DEPTH_M);
-                echo.set_default("depth", "1e-5");
-                match (self.num("c_max")?, restitution) {
-                    (Some(c), None) if c.is_finite() && c >= 0.0 => LawSpec::Adams {
-                        c_max_n_s_m: c,
-                        d_m,
-                    },
-                    (Some(c), None) => {
-                        return Err(format!(
-                            "c_max = {}: must be finite and >= 0 (N s/m)",
-                            fmt_f64(c)
-                        ));
-                    }
-                    (None, Some(e)) => LawSpec::AdamsRestitution {
-                        restitution: in_range(e, true)?,
-                        d_m,
-                    },
-                    (Some(_), Some(_)) => {
-                        return Err("law adams: give c_max or restitution, not both".into());
-                    }
-                    (None, None) => return Err("law adams needs c_max or restitution".into()),
-                }
-            }
+            LawName::Adams => self.adams(restitution, echo)?,
             LawName::HuntCrossley => LawSpec::HuntCrossley {
                 restitution: need_e()?,
             },
@@ -526,6 +490,33 @@ impl InputRow {
             LawName::Tsuji => LawSpec::Tsuji {
                 restitution: need_e()?,
             },
+        })
+    }
+
+    /// Adams's law from `c_max` (finite, >= 0, N s/m) or `restitution` (in (0, 1)), one of the
+    /// two, and `depth` (m, default 1e-5, which `echo` then shows).
+    fn adams(&self, restitution: Option<f64>, echo: &mut InputRow) -> Result<LawSpec, String> {
+        let d_m = self.positive("depth", "m")?.unwrap_or(DEFAULT_DEPTH_M);
+        echo.set_default("depth", "1e-5");
+        Ok(match (self.num("c_max")?, restitution) {
+            (Some(c), None) if c.is_finite() && c >= 0.0 => LawSpec::Adams {
+                c_max_n_s_m: c,
+                d_m,
+            },
+            (Some(c), None) => {
+                return Err(format!(
+                    "c_max = {}: must be finite and >= 0 (N s/m)",
+                    fmt_f64(c)
+                ));
+            }
+            (None, Some(e)) => LawSpec::AdamsRestitution {
+                restitution: restitution_in_range(e, true, LawName::Adams)?,
+                d_m,
+            },
+            (Some(_), Some(_)) => {
+                return Err("law adams: give c_max or restitution, not both".into());
+            }
+            (None, None) => return Err("law adams needs c_max or restitution".into()),
         })
     }
 
@@ -706,6 +697,22 @@ pub fn user_terms(e: SimError) -> String {
         _ => name.as_str(),
     };
     format!("{column} = {}: must be {requirement}", fmt_f64(*value))
+}
+
+/// The coefficient of restitution `e` for law `name`, when in `(0, 1]` (`(0, 1)` with
+/// `top_open`); otherwise the message that says so.
+fn restitution_in_range(e: f64, top_open: bool, name: LawName) -> Result<f64, String> {
+    let ok = e > 0.0 && if top_open { e < 1.0 } else { e <= 1.0 };
+    if ok {
+        Ok(e)
+    } else {
+        let top = if top_open { "1)" } else { "1]" };
+        Err(format!(
+            "restitution = {}: must be in (0, {top} for law {}",
+            fmt_f64(e),
+            name.as_str()
+        ))
+    }
 }
 
 #[cfg(test)]

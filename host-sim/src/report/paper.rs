@@ -382,28 +382,7 @@ pub fn compute(cfg: &PaperConfig) -> Result<PaperResults, SimError> {
             requirement: "at least 2 speeds and 2 radii",
         });
     }
-    let mut table3 = Vec::new();
-    let mut table2 = Vec::new();
-    for (name, mat) in paper_materials() {
-        let paper = if name == "coal" {
-            PAPER_K_COAL
-        } else {
-            PAPER_K_SANDSTONE
-        };
-        for (i, &r) in PAPER_RADII_M.iter().enumerate() {
-            let row = StiffnessRow {
-                material: name,
-                radius_m: r,
-                paper_k: paper[i],
-                ours_k: stiffness_of(&mat, r),
-            };
-            if r == SPEED_SWEEP_RADIUS_M {
-                table2.push(row.clone());
-            }
-            table3.push(row);
-        }
-    }
-
+    let (table3, table2) = stiffness_tables();
     let mut vs_speed = Vec::new();
     let mut vs_radius = Vec::new();
     for (name, mat) in paper_materials() {
@@ -436,6 +415,33 @@ pub fn compute(cfg: &PaperConfig) -> Result<PaperResults, SimError> {
         vs_radius,
         claims,
     })
+}
+
+/// The paper's Table 3 (every material and radius: the paper's stiffness beside ours) and
+/// Table 2 (its rows at the speed sweep's radius), in that order.
+fn stiffness_tables() -> (Vec<StiffnessRow>, Vec<StiffnessRow>) {
+    let mut table3 = Vec::new();
+    let mut table2 = Vec::new();
+    for (name, mat) in paper_materials() {
+        let paper = if name == "coal" {
+            PAPER_K_COAL
+        } else {
+            PAPER_K_SANDSTONE
+        };
+        for (i, &r) in PAPER_RADII_M.iter().enumerate() {
+            let row = StiffnessRow {
+                material: name,
+                radius_m: r,
+                paper_k: paper[i],
+                ours_k: stiffness_of(&mat, r),
+            };
+            if r == SPEED_SWEEP_RADIUS_M {
+                table2.push(row.clone());
+            }
+            table3.push(row);
+        }
+    }
+    (table3, table2)
 }
 
 fn of<'a>(points: &'a [SweepPoint], material: &str) -> Vec<&'a SweepPoint> {

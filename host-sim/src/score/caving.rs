@@ -1036,16 +1036,22 @@ fn report(
         reference: mining(rounds, &c.reference, crossing),
         label_oracle: mining(rounds, &c.labels, crossing),
         kl_nats_per_impact: kl,
-        lorden_delay_impacts: Information {
-            kernel: h / kl.kernel,
-            reference: h / kl.reference,
-            labels: h / kl.labels,
-        },
+        lorden_delay_impacts: lorden_delays(h, kl),
         kernel_replay_agrees: c.kernel_replay_agrees,
         pulses,
         left_out_share: left_out as f64 / pulses.max(1) as f64,
         curve,
         trace: trace(rounds, opts),
+    }
+}
+
+/// Lorden's delay to the threshold `h` (nats) at `kl` nats per impact, `h / KL` impacts, for
+/// the kernel, the reference and the labels.
+fn lorden_delays(h: f64, kl: Information) -> Information {
+    Information {
+        kernel: h / kl.kernel,
+        reference: h / kl.reference,
+        labels: h / kl.labels,
     }
 }
 

@@ -85,7 +85,7 @@ use std::time::Instant;
 
 use coalshock::math::Backend;
 use coalshock::scene::{DEFAULT_CLASSES, MAX_CLASSES};
-use coalshock::{Event, Monitor, Scene, Verdict};
+use coalshock::{Event, Monitor, Report, Scene, Verdict};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -103,7 +103,7 @@ use crate::score::replay::{match_truth, replay_events};
 use crate::score::study_error::StudyError;
 use crate::sim::generate::generate_class;
 use crate::sim::par::map_ordered;
-use crate::sim::stream::StreamOptions;
+use crate::sim::stream::{StreamOptions, Truth};
 
 /// Default impacts per simulated stream.
 pub const DEFAULT_IMPACTS_PER_STREAM: usize = 250;
@@ -951,9 +951,7 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
     tolerance: u64,
     job: &StreamJob,
 ) -> Result<ChunkResult, EvalError> {
-    let k = models.len();
-    let (col_amb, col_out, col_rej, col_miss) = (k, k + 1, k + 2, k + 3);
-    let (class, model) = (job.class, &models[job.class]);
+    let class = job.class;
     let stream = generate_class(
         scene,
         class,
@@ -980,47 +978,8 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
     let mut outcomes = Vec::with_capacity(job.n);
     let mut rejected = Vec::new();
     for (t, rep) in stream.truth.iter().zip(report_of) {
-        let (lf, lt) = model.forward(t.radius_m.ln(), t.speed_m_s.ln());
-        let oracle = decide(models, lf, lt, None);
-        let true_ln = (t.peak_force_n.ln(), t.duration_s.ln());
-        let mut o = Outcome {
-            class,
-            hertz_ln: (lf, lt),
-            true_ln,
-            measured: None,
-            column: col_miss,
-            forced: None,
-            posterior: None,
-            oracle,
-        };
-        if let Some(r) = rep.map(|i| &reports[i]) {
-            o.forced = r.verdict.forced_choice().map(usize::from);
-            o.posterior = match r.verdict {
-                Verdict::Class { posterior, .. } | Verdict::Ambiguous { posterior, .. } => {
-                    Some(posterior as f64)
-                }
-                _ => None,
-            };
-            o.column = match r.verdict {
-                Verdict::Class { class, .. } => class as usize,
-                Verdict::Ambiguous { .. } => col_amb,
-                Verdict::OutOfEnvelope { .. } => col_out,
-                Verdict::Rejected(reason) => {
-                    rejected.push(reason.name());
-                    col_rej
-                }
-            };
-            o.measured = r.measurement.map(|m| {
-                let m = measurement_from_kernel(&m);
-                MeasuredLn {
-                    ln_force: m.peak_force_n.ln(),
-                    ln_duration: m.duration_s.ln(),
-                    sigma_ln_force: m.sigma_ln_force,
-                    sigma_ln_duration: m.sigma_ln_duration,
-                }
-            });
-        }
-        outcomes.push(o);
+        let report = rep.map(|i| &reports[i]);
+        outcomes.push(outcome_of(models, class, t, report, &mut rejected));
     }
     Ok(ChunkResult {
         impacts: job.n,
@@ -1031,6 +990,61 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
         spurious: matching.unmatched_reports.len() as u64,
         kernel_seconds,
     })
+}
+
+/// The outcome of impact `t` of class `class`: the oracle's decision on its closed-form Hertz
+/// features, and the kernel's verdict and measurement from its paired `report` (none: missed);
+/// a rejected verdict's reason goes onto `rejected`.
+fn outcome_of(
+    models: &[ClassModel],
+    class: usize,
+    t: &Truth,
+    report: Option<&Report>,
+    rejected: &mut Vec<&'static str>,
+) -> Outcome {
+    let k = models.len();
+    let (col_amb, col_out, col_rej, col_miss) = (k, k + 1, k + 2, k + 3);
+    let (lf, lt) = models[class].forward(t.radius_m.ln(), t.speed_m_s.ln());
+    let oracle = decide(models, lf, lt, None);
+    let true_ln = (t.peak_force_n.ln(), t.duration_s.ln());
+    let mut o = Outcome {
+        class,
+        hertz_ln: (lf, lt),
+        true_ln,
+        measured: None,
+        column: col_miss,
+        forced: None,
+        posterior: None,
+        oracle,
+    };
+    if let Some(r) = report {
+        o.forced = r.verdict.forced_choice().map(usize::from);
+        o.posterior = match r.verdict {
+            Verdict::Class { posterior, .. } | Verdict::Ambiguous { posterior, .. } => {
+                Some(posterior as f64)
+            }
+            _ => None,
+        };
+        o.column = match r.verdict {
+            Verdict::Class { class, .. } => class as usize,
+            Verdict::Ambiguous { .. } => col_amb,
+            Verdict::OutOfEnvelope { .. } => col_out,
+            Verdict::Rejected(reason) => {
+                rejected.push(reason.name());
+                col_rej
+            }
+        };
+        o.measured = r.measurement.map(|m| {
+            let m = measurement_from_kernel(&m);
+            MeasuredLn {
+                ln_force: m.peak_force_n.ln(),
+                ln_duration: m.duration_s.ln(),
+                sigma_ln_force: m.sigma_ln_force,
+                sigma_ln_duration: m.sigma_ln_duration,
+            }
+        });
+    }
+    o
 }
 
 /// `a / b`, 0 when `b = 0`.

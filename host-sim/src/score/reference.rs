@@ -48,7 +48,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use crate::bridge::calibrate::C_AREA;
-use crate::physics::hertz64::HertzImpact64;
+use crate::physics::hertz64::{HertzImpact64, Material64};
 use crate::physics::impact::{ImpactSpec, simulate};
 use crate::physics::integrate::SimError;
 use crate::physics::law_spec::LawSpec;
@@ -184,6 +184,66 @@ pub struct ReferenceLimit {
     pub confident_error_rate: f64,
 }
 
+/// A class's pulses at the points of its grid (see [`ClassMap::build_both`]).
+struct GridPulses<'a> {
+    /// The sphere's and the plate's material.
+    material: Material64,
+    plate: Material64,
+    /// The class's contact law, and whether it is Hertz's (features in closed form).
+    law: LawSpec,
+    closed_form: bool,
+    /// The class's Hertz power laws.
+    model: ClassModel,
+    /// The sensor whose bound is taken, at `phases` sample phases.
+    sensor: &'a Sensor,
+    phases: usize,
+}
+
+impl GridPulses<'_> {
+    /// The two grid nodes at `(x, y) = (ln R, ln u)`: the features with the duration of the
+    /// first zero and of the impulse, as deviations from the class's Hertz power laws, each
+    /// with the phase-averaged Cramér-Rao covariance of the integrated pulse.
+    fn nodes(&self, x: f64, y: f64) -> Result<[Node; 2], SimError> {
+        let (radius_m, speed_m_s) = (x.exp(), y.exp());
+        let hertz = HertzImpact64::new(&self.material, &self.plate, radius_m, speed_m_s)?;
+        let mut spec = ImpactSpec::new(self.material, self.plate, radius_m, speed_m_s);
+        spec.law = self.law;
+        let step_s = hertz.duration_s / RECORD_POINTS;
+        spec.record = Some(step_s);
+        let report = simulate(&spec)?;
+        let f_max = report.peak_force_n;
+        let [zero_f, impulse_f] = if self.closed_form {
+            [[hertz.peak_force_n.ln(), hertz.duration_s.ln()]; 2]
+        } else {
+            [
+                [f_max.ln(), report.pulse_duration_s.ln()],
+                [f_max.ln(), (report.impulse_n_s / (C_AREA * f_max)).ln()],
+            ]
+        };
+        let pulse = ForcePulse {
+            start_s: 0.0,
+            duration_s: report.duration_s,
+            scale: 1.0,
+            shape: PulseShape::Series {
+                step_s,
+                force_n: report
+                    .force_series
+                    .unwrap_or_default()
+                    .into_iter()
+                    .map(|(_, f)| f)
+                    .collect(),
+            },
+        };
+        let cov = phase_averaged_crb(self.sensor, &pulse, self.phases);
+        let hertz_f = self.model.forward(x, y);
+        let deviation = |f: [f64; 2]| [f[0] - hertz_f.0, f[1] - hertz_f.1];
+        Ok([
+            node(deviation(zero_f), cov),
+            node(deviation(impulse_f), cov),
+        ])
+    }
+}
+
 /// One grid point: deviation from the Hertz power laws, log standard deviations, correlation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Node {
@@ -237,53 +297,29 @@ impl ClassMap {
                 error,
             })?;
         let closed_form = matches!(law, LawSpec::Hertz);
+        let at = GridPulses {
+            material,
+            plate,
+            law,
+            closed_form,
+            model,
+            sensor,
+            phases: opts.phases,
+        };
         let n = opts.grid;
         let (mut first_zero, mut impulse) = (Vec::with_capacity(n * n), Vec::with_capacity(n * n));
         for j in 0..n {
             for i in 0..n {
                 let (x, y) = grid_point(&model, n, i, j);
-                let (radius_m, speed_m_s) = (x.exp(), y.exp());
-                let err = |error| ReferenceError::Simulation {
-                    class: c.name.clone(),
-                    radius_m,
-                    speed_m_s,
-                    error,
-                };
-                let hertz =
-                    HertzImpact64::new(&material, &plate, radius_m, speed_m_s).map_err(err)?;
-                let mut spec = ImpactSpec::new(material, plate, radius_m, speed_m_s);
-                spec.law = law;
-                let step_s = hertz.duration_s / RECORD_POINTS;
-                spec.record = Some(step_s);
-                let report = simulate(&spec).map_err(err)?;
-                let f_max = report.peak_force_n;
-                let [zero_f, impulse_f] = if closed_form {
-                    [[hertz.peak_force_n.ln(), hertz.duration_s.ln()]; 2]
-                } else {
-                    [
-                        [f_max.ln(), report.pulse_duration_s.ln()],
-                        [f_max.ln(), (report.impulse_n_s / (C_AREA * f_max)).ln()],
-                    ]
-                };
-                let pulse = ForcePulse {
-                    start_s: 0.0,
-                    duration_s: report.duration_s,
-                    scale: 1.0,
-                    shape: PulseShape::Series {
-                        step_s,
-                        force_n: report
-                            .force_series
-                            .unwrap_or_default()
-                            .into_iter()
-                            .map(|(_, f)| f)
-                            .collect(),
-                    },
-                };
-                let cov = phase_averaged_crb(sensor, &pulse, opts.phases);
-                let hertz_f = model.forward(x, y);
-                let deviation = |f: [f64; 2]| [f[0] - hertz_f.0, f[1] - hertz_f.1];
-                first_zero.push(node(deviation(zero_f), cov));
-                impulse.push(node(deviation(impulse_f), cov));
+                let [zero_node, impulse_node] =
+                    at.nodes(x, y).map_err(|error| ReferenceError::Simulation {
+                        class: c.name.clone(),
+                        radius_m: x.exp(),
+                        speed_m_s: y.exp(),
+                        error,
+                    })?;
+                first_zero.push(zero_node);
+                impulse.push(impulse_node);
             }
         }
         let map = |duration, nodes| Self {
@@ -534,30 +570,19 @@ pub fn reference_accuracy(
     let (mut covered, mut covered_wrong) = (0.0, 0.0);
     let mut per_class_accuracy = Vec::with_capacity(maps.len());
     for (i, m) in maps.iter().enumerate() {
-        let (mut right, mut right0) = (0usize, 0usize);
-        let (mut sure, mut sure_wrong) = (0usize, 0usize);
-        for _ in 0..n {
-            let (x, y) = m.model.sample(uniform(), uniform());
-            let l = m.at(x, y);
-            let [vf, vt, c] = l.covariance;
-            let (sf, st) = (vf.sqrt(), vt.sqrt());
-            let r = c / (sf * st);
-            let (g1, g2) = gauss_pair(uniform);
-            let f = l.features;
-            let noisy = [
-                f[0] + sf * g1,
-                f[1] + st * (r * g1 + (1.0 - r * r).max(0.0).sqrt() * g2),
-            ];
-            let (class, posterior) = decide_with_posterior(maps, noisy);
-            right += (class == i) as usize;
-            if posterior >= confidence_threshold {
-                sure += 1;
-                sure_wrong += (class != i) as usize;
-            }
-            right0 += (decide(maps, f, false) == i) as usize;
-            sum_sf += sf;
-            sum_st += st;
-        }
+        let ClassDraws {
+            right,
+            right0,
+            sure,
+            sure_wrong,
+        } = draw_class(
+            maps,
+            i,
+            n,
+            confidence_threshold,
+            uniform,
+            (&mut sum_sf, &mut sum_st),
+        );
         let w = m.model.prior / total_prior;
         let a = right as f64 / n as f64;
         per_class_accuracy.push(a);
@@ -577,11 +602,7 @@ pub fn reference_accuracy(
         draws,
         mean_sigma_ln_force: sum_sf / draws as f64,
         mean_sigma_ln_duration: sum_st / draws as f64,
-        features: if maps.iter().all(|m| m.features == "hertz_closed_form") {
-            "hertz_closed_form"
-        } else {
-            "integrator"
-        },
+        features: features_of(maps),
         duration_feature: maps
             .first()
             .map_or(DurationFeature::FirstZero, |m| m.duration),
@@ -595,6 +616,71 @@ pub fn reference_accuracy(
             0.0
         },
     }
+}
+
+/// Where the maps' features come from: `hertz_closed_form` when every map's do, else
+/// `integrator`.
+fn features_of(maps: &[ClassMap]) -> &'static str {
+    if maps.iter().all(|m| m.features == "hertz_closed_form") {
+        "hertz_closed_form"
+    } else {
+        "integrator"
+    }
+}
+
+/// What the draws of one class gave (see [`draw_class`]).
+struct ClassDraws {
+    /// Right decisions on the noisy features, and on the noiseless ones.
+    right: usize,
+    right0: usize,
+    /// Confident decisions (posterior at the threshold or above), and the wrong among them.
+    sure: usize,
+    sure_wrong: usize,
+}
+
+/// `n` draws of class `i` of `maps` from `uniform`, each decided on its features with the
+/// bound's correlated Gaussian noise ([`decide_with_posterior`], confident at
+/// `confidence_threshold`) and without noise ([`decide`]); each draw's `sigma ln F` and
+/// `sigma ln t` are added to `sums`, in draw order.
+fn draw_class(
+    maps: &[ClassMap],
+    i: usize,
+    n: usize,
+    confidence_threshold: f64,
+    uniform: &mut impl FnMut() -> f64,
+    sums: (&mut f64, &mut f64),
+) -> ClassDraws {
+    let m = &maps[i];
+    let (sum_sf, sum_st) = sums;
+    let mut d = ClassDraws {
+        right: 0,
+        right0: 0,
+        sure: 0,
+        sure_wrong: 0,
+    };
+    for _ in 0..n {
+        let (x, y) = m.model.sample(uniform(), uniform());
+        let l = m.at(x, y);
+        let [vf, vt, c] = l.covariance;
+        let (sf, st) = (vf.sqrt(), vt.sqrt());
+        let r = c / (sf * st);
+        let (g1, g2) = gauss_pair(uniform);
+        let f = l.features;
+        let noisy = [
+            f[0] + sf * g1,
+            f[1] + st * (r * g1 + (1.0 - r * r).max(0.0).sqrt() * g2),
+        ];
+        let (class, posterior) = decide_with_posterior(maps, noisy);
+        d.right += (class == i) as usize;
+        if posterior >= confidence_threshold {
+            d.sure += 1;
+            d.sure_wrong += (class != i) as usize;
+        }
+        d.right0 += (decide(maps, f, false) == i) as usize;
+        *sum_sf += sf;
+        *sum_st += st;
+    }
+    d
 }
 
 /// The reference limit of `scene` (see the module docs), Monte Carlo seeded with `seed`, with

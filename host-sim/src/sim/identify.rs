@@ -806,6 +806,26 @@ struct Rings<'a> {
 }
 
 impl Rings<'_> {
+    /// The accelerometer's resonance from the ring-downs ([`identify_accelerometer`]), with
+    /// every mode the pencil saw (`refined`, `(f_hz, zeta)`, reported or not: `--modes`)
+    /// ringing on after the pulses, over noise `noise_rms` (counts).
+    fn accelerometer(&self, refined: &[(f64, f64)], noise_rms: f64) -> Option<ResonanceEstimate> {
+        let seen: Vec<f64> = refined.iter().map(|m| m.0).collect();
+        let modes = ModesSeen {
+            poles: self.poles,
+            frequencies_hz: &seen,
+        };
+        identify_accelerometer(
+            self.y,
+            self.pulses,
+            self.windows,
+            self.fits,
+            &modes,
+            noise_rms,
+            self.fs,
+        )
+    }
+
     /// Pulse `k`'s `(group, K_j, Delta c_j)` under the current `gains`: the pulse with the
     /// ring before it removed, inverted through the beam into the rigid signal `u`,
     /// `K_j = p_j^2 U(p_j) / (p_j - conj p_j)` and the jump of each mode's amplitude across
@@ -981,9 +1001,7 @@ fn pole_search(
 pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identification, IdentifyError> {
     validate_identify(opts)?;
     let fs = opts.sample_rate_hz;
-    let raw: Vec<f64> = samples.iter().map(|&v| v as f64).collect();
-    let base = median(&raw);
-    let y: Vec<f64> = raw.iter().map(|v| v - base).collect();
+    let y = less_median(samples);
 
     // 1. Pulses and free windows.
     let (pulses, windows) = pulses_and_windows(&y, fs)?;
@@ -1009,18 +1027,6 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
     // 4. The accelerometer, then the gains. The gains need not know the accelerometer: the
     // beam-inverted pulse is the rigid signal already filtered by it, `A U`, and the
     // ring-down it leaves is that of `H_b (A U)`.
-    let accel = if opts.accelerometer {
-        // Every mode the pencil saw, reported or not (`--modes`), rings on after the pulses.
-        let seen: Vec<f64> = refined.iter().map(|m| m.0).collect();
-        let modes = ModesSeen {
-            poles: &poles,
-            frequencies_hz: &seen,
-        };
-        identify_accelerometer(&y, &pulses, &windows, &fits, &modes, noise_rms, fs)
-    } else {
-        None
-    };
-    let steps: Vec<ModeStep> = modes_fz.iter().map(|&(f, z)| mode_step(f, z, fs)).collect();
     let rings = Rings {
         y: &y,
         pulses: &pulses,
@@ -1029,6 +1035,12 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
         poles: &poles,
         fs,
     };
+    let accel = if opts.accelerometer {
+        rings.accelerometer(&refined, noise_rms)
+    } else {
+        None
+    };
+    let steps: Vec<ModeStep> = modes_fz.iter().map(|&(f, z)| mode_step(f, z, fs)).collect();
     let (gains, per_pulse) = rings.gains(&steps)?;
 
     // 5. Jackknife.
@@ -1045,6 +1057,13 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
         accelerometer: accel,
         accelerometer_asked: opts.accelerometer,
     })
+}
+
+/// The samples (counts) less their median: the signal about its quiet level.
+fn less_median(samples: &[i16]) -> Vec<f64> {
+    let raw: Vec<f64> = samples.iter().map(|&v| v as f64).collect();
+    let base = median(&raw);
+    raw.iter().map(|v| v - base).collect()
 }
 
 /// The beam's modes as `identify_accelerometer` needs them.
