@@ -22,6 +22,7 @@
 use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
 use coalshock::shape_fit::five_about;
+use host_sim::bridge::sampled_fit::force_at;
 use host_sim::physics::hertz64::Material64;
 use host_sim::physics::impact::{ImpactSpec, simulate};
 use host_sim::physics::law_spec::LawSpec;
@@ -70,18 +71,6 @@ fn pulse(
     }
     let duration = area / (C_AREA * peak);
     (series, peak, duration, duration / hertz_s)
-}
-
-fn force_at(s: &[(f64, f64)], t: f64) -> f64 {
-    let (Some(first), Some(last)) = (s.first(), s.last()) else {
-        return 0.0;
-    };
-    if t <= first.0 || t >= last.0 {
-        return 0.0;
-    }
-    let i = s.partition_point(|p| p.0 <= t).clamp(1, s.len() - 1);
-    let (a, b) = (s[i - 1], s[i]);
-    (a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)).max(0.0)
 }
 
 /// The kernel's fit of the pulse sampled at `n` samples of `duration_s`, at each phase.

@@ -6,4 +6,5 @@ pub mod calibrate;
 pub mod convert;
 pub mod kernel_scene;
 pub mod ratio_table;
+pub mod sampled_fit;
 pub mod sampled_phase;

@@ -5,7 +5,7 @@
 
 use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_FIRST_N, PHASE_ROWS, PHASE_STEP};
 
-use crate::bridge::calibrate::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
+use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
 
 /// Sample phases per row of [`phase_calibration`]: `(j + 1/2) / TABLE_PHASES`, `j = 0..32`.
 pub const TABLE_PHASES: usize = 32;
