@@ -193,7 +193,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let scene: Scene = Scene::paper().unwrap();
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
-    ///                       cov_ln: -1e-4 };
+    ///                       cov_ln: -1e-4, asymmetry: 0.0 };
     /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
