@@ -327,6 +327,8 @@ struct Sigmas {
     shared: f32,
     /// Standard deviation of `ln sum` from the noise.
     area: f32,
+    /// The fit's own error of `ln F_max`, `FIT_FORCE n^-2.5`.
+    fit_force: f32,
     /// The fit's own error of `ln t_c`, `FIT_DURATION n^-2.5`.
     fit_duration: f32,
     /// Variance the ringing before the pulse adds to `ln F_max` and `ln sum` together.
@@ -355,6 +357,10 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// The contact is the undamped Hertz law (no calibration): its pulses are read with the
     /// Hertz shape through five samples, and a clipped one from its flanks.
     hertz: bool,
+    /// The scene carries a sampling correction (`ContactCalibration::sampled`, or the phase
+    /// table) whose spread states the fit's error at few samples per pulse: a measurement then
+    /// states its sigmas without the fit's generic bound ([`Detector::stated_sigmas`]).
+    sampling_calibrated: bool,
     hold: u16,
     max_samples: u32,
     alpha: f32,
@@ -421,6 +427,7 @@ impl<M: Backend> Detector<M> {
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
             hertz: s.contact == ContactCalibration::HERTZ && plain_area(s),
+            sampling_calibrated: sampling_calibrated(s),
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -990,14 +997,15 @@ impl<M: Backend> Detector<M> {
             return reject(RejectReason::Misshapen);
         }
         let ([_, before], [after, _]) = (p.before_max, p.after_max);
+        let (sigma_ln_force, sigma_ln_duration) = self.stated_sigmas(&sigmas);
         Detection::Pulse {
             at_sample,
             outcome: Ok(Measurement {
                 peak_force_n: peak * self.force_per_count_n,
                 duration_s: duration * self.dt_s,
-                sigma_ln_force: sigmas.ln_force,
-                sigma_ln_duration: sigmas.ln_duration,
-                cov_ln: sigmas.shared - sigmas.ln_force * sigmas.ln_force,
+                sigma_ln_force,
+                sigma_ln_duration,
+                cov_ln: sigmas.shared - sigma_ln_force * sigma_ln_force,
                 asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
             }),
         }
@@ -1115,9 +1123,26 @@ impl<M: Backend> Detector<M> {
             ln_duration,
             shared,
             area: sigma_area,
+            fit_force,
             fit_duration,
             ring2,
         }
+    }
+
+    /// The sigmas of `ln F_max` and `ln t_c` a measurement states: the noise model's `s`, less
+    /// the fit's own error (`FIT_FORCE`, `FIT_DURATION` times `n^-2.5`, in quadrature) where the
+    /// scene's sampling correction states that error in its place, so that it is not counted
+    /// twice. The detector's own checks keep it.
+    #[inline(always)]
+    fn stated_sigmas(&self, s: &Sigmas) -> (f32, f32) {
+        if !self.sampling_calibrated {
+            return (s.ln_force, s.ln_duration);
+        }
+        let less = |a: f32, b: f32| M::sqrt((a * a - b * b).max(0.0));
+        (
+            less(s.ln_force, s.fit_force),
+            less(s.ln_duration, s.fit_duration),
+        )
     }
 
     /// Whether the pulse's energy and area agree with the contact's shape for a fitted `peak`
@@ -1195,6 +1220,16 @@ fn plain_area(s: &crate::scene::Settings) -> bool {
 #[cfg(not(feature = "plasticity"))]
 fn plain_area(_: &crate::scene::Settings) -> bool {
     true
+}
+
+/// Whether the scene carries a sampling correction, by samples per pulse or (feature
+/// `sampled_phase`) by samples per pulse and phase.
+fn sampling_calibrated(s: &crate::scene::Settings) -> bool {
+    #[cfg(feature = "sampled_phase")]
+    if s.sampled_phase != crate::SampledPhase::NONE {
+        return true;
+    }
+    s.contact.sampled != crate::SampledCalibration::NONE
 }
 
 /// One quiet sample `v` into the scaled mean square `sum` (`ms (1 - w) / w`, see

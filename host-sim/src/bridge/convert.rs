@@ -6,12 +6,11 @@
 
 use coalshock::math::Backend;
 use coalshock::ratio_map::RatioMap;
-use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS, SampledPhase};
+use coalshock::sampled_phase::SampledPhase;
 use coalshock::scene::SAMPLED_POINTS;
 
 use crate::bridge::calibrate::{Calibration64, Sampled64};
 use crate::bridge::ratio_table::RatioTable64;
-use crate::bridge::sampled_phase::Phase64;
 use coalshock::{
     Accelerometer, BeamMode, ChainDynamics, ChainTolerance, ContactCalibration, Material,
     Measurement, ParticleClass, Range, SampledCalibration, Scene, SensorChain, Settings, Speed,
@@ -168,18 +167,6 @@ pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
     }
 }
 
-/// The phase table in the kernel's f32.
-pub fn phase_to_kernel(t: &Phase64) -> SampledPhase {
-    let f = |v: &[[f64; PHASE_COLUMNS]; PHASE_ROWS]| v.map(|r| r.map(|x| x as f32));
-    SampledPhase {
-        asymmetry: t.asymmetry.map(|r| r.map(|x| x as f32)),
-        ln_force: f(&t.ln_force),
-        ln_duration: f(&t.ln_duration),
-        sigma_ln_force: f(&t.sigma_ln_force),
-        sigma_ln_duration: f(&t.sigma_ln_duration),
-    }
-}
-
 /// The kernel settings of a scene file from its `[settings]` (`file`) and the f64 values its
 /// calibration computed ([`crate::bridge::kernel_scene::SceneCalibration`]): `contact`, the
 /// contact calibration of a damped law or a yielding class (`None`: the Hertz law, no yield),
@@ -239,7 +226,7 @@ pub fn settings_to_kernel(
     };
     s.sampled_phase = cal
         .and_then(|c| c.phase)
-        .map_or(SampledPhase::NONE, |t| phase_to_kernel(&t));
+        .map_or(SampledPhase::NONE, |t| t.to_kernel());
     if let Some(c) = cal {
         if s.shape_tolerance == d.shape_tolerance {
             let spread = c.spread_ln.shape + c.sampled_shape_spread;
