@@ -2,7 +2,7 @@
 //! (`coalshock::SampledPhase`): the kernel's own three-sample fit on the integrator's pulses at
 //! each row `n_k` and [`TABLE_PHASES`] phases, binned by the neighbour asymmetry the kernel
 //! measures on the same samples. Each cell's spread is what the table leaves as the kernel
-//! reads it ([`spread_as_read`]): between its rows as well as on them, at the samples per
+//! reads it (`spread_as_read`): between its rows as well as on them, at the samples per
 //! pulse the kernel infers from the measured duration.
 
 use coalshock::sampled_phase::{
@@ -51,8 +51,8 @@ pub fn row_samples(k: usize) -> f64 {
     f64::from(PHASE_FIRST_N) * f64::from(PHASE_STEP).powi(k as i32)
 }
 
-/// The table of `pulses` (see the module docs): [`means_on_rows`], its spreads then taken as
-/// the kernel reads the table ([`spread_as_read`]).
+/// The table of `pulses` (see the module docs): `means_on_rows`, its spreads then taken as
+/// the kernel reads the table (`spread_as_read`).
 pub fn phase_calibration(pulses: &[ContinuousPulse]) -> Phase64 {
     let mut table = means_on_rows(pulses);
     spread_as_read(pulses, &mut table);
