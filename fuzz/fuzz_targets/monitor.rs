@@ -198,6 +198,22 @@ impl Bytes<'_> {
                 240..=247 => self.u16(),
                 _ => 256,
             },
+            sampled_phase: self.sampled_phase(),
+        }
+    }
+    /// No phase table half the time, else one whose axes and cells the bytes choose.
+    fn sampled_phase(&mut self) -> coalshock::SampledPhase {
+        use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS};
+        if self.u8() < 128 {
+            return coalshock::SampledPhase::NONE;
+        }
+        let (lo, hi) = (self.f32_in(-1.0, 0.0), self.f32_in(0.0, 1.0));
+        coalshock::SampledPhase {
+            asymmetry: [[lo, hi]; PHASE_ROWS],
+            ln_force: [[self.f32_in(-0.3, 0.1); PHASE_COLUMNS]; PHASE_ROWS],
+            ln_duration: [[self.f32_in(-0.3, 0.3); PHASE_COLUMNS]; PHASE_ROWS],
+            sigma_ln_force: [[self.f32_in(0.0, 0.2); PHASE_COLUMNS]; PHASE_ROWS],
+            sigma_ln_duration: [[self.f32_in(0.0, 0.5); PHASE_COLUMNS]; PHASE_ROWS],
         }
     }
 }
