@@ -52,17 +52,58 @@ pub fn row_samples(k: usize) -> f64 {
 }
 
 /// The table of `pulses` (see the module docs): `means_on_rows`, its spreads then taken as
-/// the kernel reads the table (`spread_as_read`).
+/// the kernel reads the table (`spread_as_read`). Each row's pulses are sampled and fitted
+/// once, at every offset of [`BETWEEN_ROWS`]; the means take the offset 0, the row itself.
 pub fn phase_calibration(pulses: &[ContinuousPulse]) -> Phase64 {
-    let mut table = means_on_rows(pulses);
-    spread_as_read(pulses, &mut table);
+    let rows: Vec<Vec<Vec<Fit>>> = (0..PHASE_ROWS)
+        .map(|k| {
+            BETWEEN_ROWS
+                .iter()
+                .map(|&s| fits_at(pulses, row_samples(k) * f64::from(PHASE_STEP).powf(s)))
+                .collect()
+        })
+        .collect();
+    let mut table = means_on_rows(&rows);
+    spread_as_read(&rows, &mut table);
     table
 }
 
-/// The table's means and spreads on its rows: each pulse sampled at `n_k` samples per pulse
-/// and [`TABLE_PHASES`] phases goes to the asymmetry point nearest its own asymmetry; a point
-/// no pulse reached takes its nearest filled neighbour's values.
-fn means_on_rows(pulses: &[ContinuousPulse]) -> Phase64 {
+/// One pulse sampled at `n` samples of its duration from the area, as the kernel fits it: the
+/// fit's duration (samples), the neighbour asymmetry, and its errors `ln(F_fit / F_peak)` and
+/// `ln(t_fit / t_area)`.
+#[derive(Debug, Clone, Copy)]
+struct Fit {
+    samples: f64,
+    asymmetry: f64,
+    ln_force: f64,
+    ln_duration: f64,
+}
+
+/// Each of `pulses` sampled at `n` samples per pulse and [`TABLE_PHASES`] phases,
+/// `(j + 1/2) / TABLE_PHASES`, and fitted as the kernel fits it.
+fn fits_at(pulses: &[ContinuousPulse], n: f64) -> Vec<Fit> {
+    let mut fits = Vec::new();
+    for p in pulses {
+        let dt = p.duration_s / n;
+        for j in 0..TABLE_PHASES {
+            let phase = (j as f64 + 0.5) / TABLE_PHASES as f64;
+            if let Some((peak, samples, a)) = fit_sampled_at(p.series, dt, phase) {
+                fits.push(Fit {
+                    samples,
+                    asymmetry: a,
+                    ln_force: (peak / p.peak_n).ln(),
+                    ln_duration: (samples * dt / p.duration_s).ln(),
+                });
+            }
+        }
+    }
+    fits
+}
+
+/// The table's means and spreads on its rows: each row's fits at `n_k` samples per pulse
+/// (`rows[k][0]`) go to the asymmetry point nearest their own asymmetry; a point no fit
+/// reached takes its nearest filled neighbour's values.
+fn means_on_rows(rows: &[Vec<Vec<Fit>>]) -> Phase64 {
     let zero = [[0.0; PHASE_COLUMNS]; PHASE_ROWS];
     let mut out = Phase64 {
         asymmetry: [[0.0; 2]; PHASE_ROWS],
@@ -71,35 +112,27 @@ fn means_on_rows(pulses: &[ContinuousPulse]) -> Phase64 {
         sigma_ln_force: zero,
         sigma_ln_duration: zero,
     };
-    for k in 0..PHASE_ROWS {
-        let n = row_samples(k);
-        let mut points = Vec::new();
-        for p in pulses {
-            let dt = p.duration_s / n;
-            for j in 0..TABLE_PHASES {
-                let phase = (j as f64 + 0.5) / TABLE_PHASES as f64;
-                if let Some((peak, samples, a)) = fit_sampled_at(p.series, dt, phase) {
-                    let lt = (samples * dt / p.duration_s).ln();
-                    points.push((a, (peak / p.peak_n).ln(), lt));
-                }
-            }
-        }
-        let lo = points.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
-        let hi = points.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    for (k, row) in rows.iter().enumerate().take(PHASE_ROWS) {
+        let Some(fits) = row.first() else {
+            continue;
+        };
+        let lo = fits
+            .iter()
+            .map(|f| f.asymmetry)
+            .fold(f64::INFINITY, f64::min);
+        let hi = fits
+            .iter()
+            .map(|f| f.asymmetry)
+            .fold(f64::NEG_INFINITY, f64::max);
         if lo.is_nan() || hi.is_nan() || lo > hi {
             continue;
         }
         out.asymmetry[k] = [lo, hi];
-        let step = (hi - lo) / (PHASE_COLUMNS - 1) as f64;
         let mut cells: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); PHASE_COLUMNS];
-        for &(a, lf, lt) in &points {
-            let c = if step > 0.0 {
-                (((a - lo) / step).round() as usize).min(PHASE_COLUMNS - 1)
-            } else {
-                0
-            };
-            cells[c].0.push(lf);
-            cells[c].1.push(lt);
+        for f in fits {
+            let c = nearest_column([lo, hi], f.asymmetry);
+            cells[c].0.push(f.ln_force);
+            cells[c].1.push(f.ln_duration);
         }
         for c in 0..PHASE_COLUMNS {
             let Some(filled) = (0..PHASE_COLUMNS)
@@ -115,50 +148,36 @@ fn means_on_rows(pulses: &[ContinuousPulse]) -> Phase64 {
     out
 }
 
-/// Offsets from each row, in row steps ([`PHASE_STEP`]), at which [`spread_as_read`] samples
-/// the pulses: on the row and every eighth of the way to the next (a quarter of the way
-/// apart, Tsuji's error at e 0.3 changed between the samples by 5 times the spread they
+/// Offsets from each row, in row steps ([`PHASE_STEP`]), at which [`phase_calibration`]
+/// samples the pulses: on the row and every eighth of the way to the next (a quarter of the
+/// way apart, Tsuji's error at e 0.3 changed between the samples by 5 times the spread they
 /// stated).
 const BETWEEN_ROWS: [f64; 8] = [0.0, 0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875];
 
-/// Residuals a cell needs before [`spread_as_read`] takes their spread for its own.
+/// Residuals a cell needs before `spread_as_read` takes their spread for its own.
 const MIN_RESIDUALS: usize = 30;
 
 /// Sets each cell's spreads of `table` to what the table leaves as the kernel reads it
-/// (`coalshock::Scene::hertz_equivalent`): each pulse sampled at `n_k 1.25^s` samples per pulse
-/// ([`BETWEEN_ROWS`]) and [`TABLE_PHASES`] phases, fitted as the kernel fits it and measured at
-/// least [`MIN_DURATION_SAMPLES`] long, is read at the samples per pulse the kernel infers from
-/// the fit's duration (two fixed-point steps of `ln n = ln n_measured - ln_duration(ln n, a)`)
-/// and leaves `ln(F_fit / F_peak) - ln_force` and `ln(t_fit / t_area) - ln_duration` there.
-/// Each residual goes to the cell nearest where it was read; a cell of at least
-/// [`MIN_RESIDUALS`] takes their root mean square. Between rows the fit's error need not
-/// follow the table's interpolation (Tsuji's `t^(1/4)` onset at 2.5-5 samples per pulse), and
-/// a spread taken on the rows alone misses that.
-fn spread_as_read(pulses: &[ContinuousPulse], table: &mut Phase64) {
+/// (`coalshock::Scene::hertz_equivalent`): each fit of `rows` (every row at every offset of
+/// [`BETWEEN_ROWS`]) measured at least [`MIN_DURATION_SAMPLES`] long is read at the samples
+/// per pulse the kernel infers from the fit's duration (two fixed-point steps of
+/// `ln n = ln n_measured - ln_duration(ln n, a)`) and leaves `ln(F_fit / F_peak) - ln_force`
+/// and `ln(t_fit / t_area) - ln_duration` there. Each residual goes to the cell nearest where
+/// it was read; a cell of at least [`MIN_RESIDUALS`] takes their root mean square. Between
+/// rows the fit's error need not follow the table's interpolation (Tsuji's `t^(1/4)` onset at
+/// 2.5-5 samples per pulse), and a spread taken on the rows alone misses that.
+fn spread_as_read(rows: &[Vec<Vec<Fit>>], table: &mut Phase64) {
     let kernel = table.to_kernel();
     let mut cells = vec![vec![(Vec::new(), Vec::new()); PHASE_COLUMNS]; PHASE_ROWS];
-    for k in 0..PHASE_ROWS {
-        for s in BETWEEN_ROWS {
-            let n = row_samples(k) * f64::from(PHASE_STEP).powf(s);
-            for p in pulses {
-                let dt = p.duration_s / n;
-                for j in 0..TABLE_PHASES {
-                    let phase = (j as f64 + 0.5) / TABLE_PHASES as f64;
-                    let Some((peak, samples, a)) = fit_sampled_at(p.series, dt, phase)
-                        .filter(|f| f.1 >= f64::from(MIN_DURATION_SAMPLES))
-                    else {
-                        continue;
-                    };
-                    let Some((ln_n, (lf, lt))) = read_as_kernel(&kernel, samples, a) else {
-                        continue;
-                    };
-                    let (row, col) = nearest_cell(&table.asymmetry, ln_n, a);
-                    let cell: &mut (Vec<f64>, Vec<f64>) = &mut cells[row][col];
-                    cell.0.push((peak / p.peak_n).ln() - lf);
-                    cell.1.push((samples * dt / p.duration_s).ln() - lt);
-                }
-            }
-        }
+    let fits = rows.iter().flatten().flatten();
+    for f in fits.filter(|f| f.samples >= f64::from(MIN_DURATION_SAMPLES)) {
+        let Some((ln_n, (lf, lt))) = read_as_kernel(&kernel, f.samples, f.asymmetry) else {
+            continue;
+        };
+        let (row, col) = nearest_cell(&table.asymmetry, ln_n, f.asymmetry);
+        let cell: &mut (Vec<f64>, Vec<f64>) = &mut cells[row][col];
+        cell.0.push(f.ln_force - lf);
+        cell.1.push(f.ln_duration - lt);
     }
     for (k, row) in cells.iter().enumerate() {
         for (c, (rf, rt)) in row.iter().enumerate() {
@@ -189,18 +208,22 @@ fn read_as_kernel(kernel: &SampledPhase, samples: f64, a: f64) -> Option<(f64, (
 }
 
 /// The cell nearest `(ln n, a)`: the row nearest `ln n` (held at the ends), and the asymmetry
-/// point of that row nearest `a`.
+/// point of that row nearest `a` ([`nearest_column`]).
 fn nearest_cell(axes: &[[f64; 2]; PHASE_ROWS], ln_n: f64, a: f64) -> (usize, usize) {
     let x = (ln_n - f64::from(PHASE_FIRST_N).ln()) / f64::from(PHASE_STEP).ln();
     let row = (x.round().max(0.0) as usize).min(PHASE_ROWS - 1);
-    let [lo, hi] = axes[row];
+    (row, nearest_column(axes[row], a))
+}
+
+/// The asymmetry point nearest `a` on a row whose points span `[lo, hi]` (held at the ends;
+/// the first for a row of one point).
+fn nearest_column([lo, hi]: [f64; 2], a: f64) -> usize {
     let step = (hi - lo) / (PHASE_COLUMNS - 1) as f64;
-    let col = if step > 0.0 {
+    if step > 0.0 {
         ((a - lo) / step)
             .round()
             .clamp(0.0, (PHASE_COLUMNS - 1) as f64) as usize
     } else {
         0
-    };
-    (row, col)
+    }
 }
