@@ -2,7 +2,6 @@
 
 use crate::envelope::{Inverted, NoiseXy, Side};
 use crate::math::Backend;
-use crate::sampled::SampledCalibration;
 use crate::scene::Scene;
 
 /// A pulse the detector measured: peak contact force and contact duration, with their
@@ -349,13 +348,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// measurement's sigmas); the identity for an undamped elastic contact.
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
-        #[cfg(feature = "sampled_phase")]
-        let table = &self.settings().sampled_phase;
-        #[cfg(feature = "sampled_phase")]
-        let phase = *table != crate::SampledPhase::NONE;
-        #[cfg(not(feature = "sampled_phase"))]
-        let phase = false;
-        if c.sampled == SampledCalibration::NONE && !phase {
+        if !self.settings().corrects_sampling() {
             return Measurement {
                 peak_force_n: m.peak_force_n / c.force_ratio,
                 duration_s: m.duration_s / c.duration_ratio,
@@ -363,6 +356,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             };
         }
         // The phase table where it reaches, else the correction by samples per pulse.
+        #[cfg(feature = "sampled_phase")]
+        let table = &self.settings().sampled_phase;
         let at = |ln_n: f32| {
             #[cfg(feature = "sampled_phase")]
             if let Some(v) = table.at(ln_n, m.asymmetry) {

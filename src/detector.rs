@@ -357,8 +357,8 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// The contact is the undamped Hertz law (no calibration): its pulses are read with the
     /// Hertz shape through five samples, and a clipped one from its flanks.
     hertz: bool,
-    /// The scene carries a sampling correction (`ContactCalibration::sampled`, or the phase
-    /// table) whose spread states the fit's error at few samples per pulse: a measurement then
+    /// The scene carries a sampling correction ([`crate::Settings::corrects_sampling`]) whose
+    /// spread states the fit's error at few samples per pulse: a measurement then
     /// states its sigmas without the fit's generic bound ([`Detector::stated_sigmas`]).
     sampling_calibrated: bool,
     hold: u16,
@@ -427,7 +427,7 @@ impl<M: Backend> Detector<M> {
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
             hertz: s.contact == ContactCalibration::HERTZ && plain_area(s),
-            sampling_calibrated: sampling_calibrated(s),
+            sampling_calibrated: s.corrects_sampling(),
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -1220,16 +1220,6 @@ fn plain_area(s: &crate::scene::Settings) -> bool {
 #[cfg(not(feature = "plasticity"))]
 fn plain_area(_: &crate::scene::Settings) -> bool {
     true
-}
-
-/// Whether the scene carries a sampling correction, by samples per pulse or (feature
-/// `sampled_phase`) by samples per pulse and phase.
-fn sampling_calibrated(s: &crate::scene::Settings) -> bool {
-    #[cfg(feature = "sampled_phase")]
-    if s.sampled_phase != crate::SampledPhase::NONE {
-        return true;
-    }
-    s.contact.sampled != crate::SampledCalibration::NONE
 }
 
 /// One quiet sample `v` into the scaled mean square `sum` (`ms (1 - w) / w`, see

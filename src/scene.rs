@@ -317,6 +317,24 @@ impl Settings {
         1.0 - self.confident_error_rate
     }
 
+    /// Whether the settings carry a sampling correction: by samples per pulse
+    /// (`contact.sampled`) or, with the feature `sampled_phase`, by samples per pulse and
+    /// phase (`sampled_phase`). Its spread then states the fit's error at few samples per
+    /// pulse, and the classifier divides the measurement by it.
+    ///
+    /// ```
+    /// use coalshock::Settings;
+    /// assert!(!Settings::default().corrects_sampling());
+    /// ```
+    #[inline]
+    pub fn corrects_sampling(&self) -> bool {
+        #[cfg(feature = "sampled_phase")]
+        if self.sampled_phase != SampledPhase::NONE {
+            return true;
+        }
+        self.contact.sampled != SampledCalibration::NONE
+    }
+
     fn check(&self) -> Result<(), Error> {
         positive(self.trigger_sigmas, "trigger_sigmas")?;
         positive(self.release_sigmas, "release_sigmas")?;
