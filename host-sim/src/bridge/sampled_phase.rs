@@ -53,7 +53,7 @@ pub fn row_samples(k: usize) -> f64 {
 
 /// The table of `pulses` (see the module docs): `means_on_rows`, its spreads then taken as
 /// the kernel reads the table (`spread_as_read`). Each row's pulses are sampled and fitted
-/// once, at every offset of [`BETWEEN_ROWS`]; the means take the offset 0, the row itself.
+/// once, at every offset of `BETWEEN_ROWS`; the means take the offset 0, the row itself.
 pub fn phase_calibration(pulses: &[ContinuousPulse]) -> Phase64 {
     let rows: Vec<Vec<Vec<Fit>>> = (0..PHASE_ROWS)
         .map(|k| {
