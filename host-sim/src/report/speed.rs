@@ -2,8 +2,9 @@
 //! the contact integrator's impacts per second on the paper's impact (undamped Hertz and
 //! Adams IMPACT with e = 0.5, d = 0.01 mm, c_max from the restitution; one thread) for every
 //! method and tolerance of the criterion bench's ladder, with its errors and work (force and
-//! Jacobian evaluations), the `ode_solvers` crate's Dop853 on the same Hertz contact (and
-//! every method's throughput as a ratio to it at equal tolerance), the heavily damped Adams
+//! Jacobian evaluations), the `ode_solvers` crate's Dop853 on the same Hertz contact (every
+//! method's throughput as a ratio to it at equal tolerance, and host-sim's Dop853 against it
+//! at equal accuracy, [`crate::report::equal_accuracy`]), the heavily damped Adams
 //! contact (c_max = 1 % of k in SI units) for Dopri5, Rodas4 and Auto, and the
 //! wall time of an end-to-end evaluation (`evaluate`: integrator, sensor chain, kernel,
 //! scoring) of N impacts of a scene on every core and, optionally, on one.
@@ -26,6 +27,8 @@ use crate::physics::integrate::{ContactProblem, Method};
 use crate::physics::integrator_cases::{
     BENCH_NEW_TOLERANCES, MethodCase, bench_ladder, heavy_ladder, paper_problems, relative_errors,
 };
+use crate::report::best_rate::best_rate;
+use crate::report::equal_accuracy::{EqualAccuracy, equal_accuracy};
 use crate::report::ode_solvers_ref::dop853_hertz;
 use crate::scene::{self, SceneFile};
 use crate::score::evaluate::{EvalOptions, evaluate};
@@ -100,23 +103,11 @@ pub struct SpeedReport {
     pub scene: String,
     /// Integrator throughput, Hertz then Adams.
     pub integrator: Vec<IntegratorSpeed>,
+    /// host-sim's Dop853 against ode_solvers' at equal accuracy, one row per
+    /// [`BENCH_NEW_TOLERANCES`].
+    pub equal_accuracy: Vec<EqualAccuracy>,
     /// Evaluation wall times, every core first.
     pub evaluate: Vec<EvaluateSpeed>,
-}
-
-/// Runs per second of `run` (the best of batches of 100 over `seconds`).
-fn best_rate(seconds: f64, mut run: impl FnMut() -> Result<()>) -> Result<f64> {
-    const BATCH: usize = 100;
-    let start = Instant::now();
-    let mut best = f64::INFINITY;
-    while best.is_infinite() || start.elapsed().as_secs_f64() < seconds {
-        let t = Instant::now();
-        for _ in 0..BATCH {
-            run()?;
-        }
-        best = best.min(t.elapsed().as_secs_f64() / BATCH as f64);
-    }
-    Ok(1.0 / best)
 }
 
 /// Integrations per second of `case` on `problem` (the best of batches of 100 over
@@ -250,6 +241,10 @@ pub fn measure(args: &SpeedOptions) -> Result<SpeedReport> {
         let law = "Adams c_max = 1 % k";
         integrator.push(integrator_speed(law, &case, &p.heavy, heavy, secs)?);
     }
+    let equal_accuracy = BENCH_NEW_TOLERANCES
+        .iter()
+        .map(|&tol| equal_accuracy(tol, 2.0 * secs))
+        .collect::<Result<Vec<_>>>()?;
     let mut evaluate = vec![evaluate_speed(&scene, args.impacts, None)?];
     if args.one_thread {
         evaluate.push(evaluate_speed(&scene, args.impacts, Some(1))?);
@@ -257,6 +252,7 @@ pub fn measure(args: &SpeedOptions) -> Result<SpeedReport> {
     Ok(SpeedReport {
         scene: scene.name.clone(),
         integrator,
+        equal_accuracy,
         evaluate,
     })
 }
@@ -291,6 +287,8 @@ pub fn render(r: &SpeedReport) -> String {
         );
     }
     s += &ratios(r);
+    s += "\n";
+    s += &crate::report::equal_accuracy::render(&r.equal_accuracy);
     if let [all, one] = r.evaluate.as_slice() {
         s += &format!(
             "\nspeed-up on {} threads: {:.2}\n",

@@ -52,7 +52,12 @@ pub(super) enum Stepper {
 
 /// A stepper's controller constants: the factor is
 /// `clamp(err^expo1 / facold^beta / SAFE, 1 / facmax, 1 / facmin)`, and a step to an event
-/// that fails shrinks by `SAFE err^shrink_expo`.
+/// that fails shrinks by `SAFE err^shrink_expo`. A predictive controller also takes
+/// Gustafsson's factor `(h_acc / h) (err^2 / err_acc)^expo1 / SAFE` from the last two accepted
+/// steps when it is the larger (the smaller step), as Hairer's RODAS and RADAU5 do: where the
+/// error grows step by step (the approach to the contact's end, whose force `~ (t_c - t)^1.5`
+/// has ever larger derivatives), the step shrinks ahead of it instead of being rejected every
+/// other time.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Gains {
     pub(super) expo1: f64,
@@ -60,6 +65,7 @@ pub(super) struct Gains {
     pub(super) facmin: f64,
     pub(super) facmax: f64,
     pub(super) shrink_expo: f64,
+    pub(super) predictive: bool,
 }
 
 impl Stepper {
@@ -73,6 +79,7 @@ impl Stepper {
                 facmin: FACMIN,
                 facmax: FACMAX,
                 shrink_expo: -0.2,
+                predictive: false,
             },
             Stepper::Dop853 => Gains {
                 expo1: 0.125,
@@ -80,6 +87,7 @@ impl Stepper {
                 facmin: 1.0 / 3.0,
                 facmax: 6.0,
                 shrink_expo: -0.125,
+                predictive: true,
             },
             Stepper::Rodas4 => Gains {
                 expo1: 0.25,
@@ -87,6 +95,7 @@ impl Stepper {
                 facmin: 0.2,
                 facmax: 6.0,
                 shrink_expo: -0.25,
+                predictive: true,
             },
         }
     }
@@ -113,6 +122,9 @@ pub(super) struct StepControl {
     pub(super) ln_facold: f64,
     /// Whether the last trial was rejected (then the step may not grow).
     pub(super) last_rejected: bool,
+    /// The last accepted step of this stepper and ln of its error (at least `ln 1e-2`), for
+    /// the predictive controller ([`Gains::predictive`]); `None` before the first.
+    pub(super) last_accepted: Option<(f64, f64)>,
     /// RK4's ungraded step `1 / steps_per_tc` (0 for the adaptive methods).
     pub(super) h_rk: f64,
     /// RK4's step factor after event retries (1, halved per retry).
@@ -121,6 +133,9 @@ pub(super) struct StepControl {
     /// [`CALM_H_RHO`].
     pub(super) calm: u32,
 }
+
+/// `ln 1e-2`, the least error the predictive controller remembers (Hairer's RODAS).
+const LN_ERR_ACC_MIN: f64 = -4.605_170_185_988_091;
 
 /// `ln 1e-4`, the least `ln facold`.
 pub(super) fn ln_facold_min() -> f64 {
@@ -154,6 +169,7 @@ impl StepControl {
             hmax,
             ln_facold: ln_facold_min(),
             last_rejected: false,
+            last_accepted: None,
             h_rk: match method {
                 Method::Rk4 { steps_per_tc } => 1.0 / f64::from(steps_per_tc),
                 _ => 0.0,
@@ -206,8 +222,15 @@ impl StepControl {
             self.last_rejected = true;
             return None;
         }
-        let fac = ((g.expo1 * ln_err - g.beta * self.ln_facold).exp() / SAFE)
+        let mut fac = ((g.expo1 * ln_err - g.beta * self.ln_facold).exp() / SAFE)
             .clamp(1.0 / g.facmax, 1.0 / g.facmin);
+        if g.predictive {
+            if let Some((h_acc, ln_err_acc)) = self.last_accepted {
+                let gus = h_acc / self.h * (g.expo1 * (2.0 * ln_err - ln_err_acc)).exp() / SAFE;
+                fac = fac.max(gus.clamp(1.0 / g.facmax, 1.0 / g.facmin));
+            }
+            self.last_accepted = Some((self.h, ln_err.max(LN_ERR_ACC_MIN)));
+        }
         self.ln_facold = ln_err.max(ln_facold_min());
         let mut h_next = (self.h / fac).min(self.hmax);
         if self.last_rejected {
@@ -251,6 +274,7 @@ impl StepControl {
         if next != self.stepper {
             self.stepper = next;
             self.gains = next.gains();
+            self.last_accepted = None;
             self.calm = 0;
         }
     }
