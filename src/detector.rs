@@ -1055,7 +1055,12 @@ impl<M: Backend> Detector<M> {
                 weight_sum: 1.0,
             })
         } else {
-            peak_fit::<M>([before2, before, p.max, after, after2], p.sum, self.hertz)
+            peak_fit::<M>(
+                [before2, before, p.max, after, after2],
+                p.sum,
+                p.samples as f32,
+                self.hertz,
+            )
         }
     }
 

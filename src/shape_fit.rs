@@ -67,10 +67,11 @@ pub struct PeakFit {
     /// Duration `t_c = sum / (C_AREA F_max)` (samples).
     pub duration: f32,
     /// Variance of the peak over that of one sample's white noise: `var F_max = gain2
-    /// sigma^2` (the least-squares `[(J^T J)^-1]_AA`; 1 for three samples).
+    /// sigma^2` (the least-squares `[(J^T J)^-1]_AA` for five samples; for three, from the
+    /// derivatives of their closed form, see [`peak_fit`]).
     pub gain2: f32,
     /// Sum of the peak's weights over the samples, `sum_k dF_max / dy_k`: the peak shares
-    /// `sigma^2 weight_sum` of covariance with the pulse's sum (1 for three samples).
+    /// `sigma^2 weight_sum` of covariance with the pulse's sum.
     pub weight_sum: f32,
 }
 
@@ -90,7 +91,8 @@ pub fn five_about(y: &[f32], i: usize) -> [f32; 5] {
 /// the largest, `top = [y_-2, y_-1, y_0, y_1, y_2]` (`y_0` the largest), and the sum of all its
 /// samples; `None` when they are not a positive pulse. See [`peak_fit`].
 pub fn shape_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<(f32, f32)> {
-    peak_fit::<M>(top, sum, five).map(|f| (f.peak, f.duration))
+    // The noise gains, which take the number of samples in `sum`, are not returned.
+    peak_fit::<M>(top, sum, 0.0, five).map(|f| (f.peak, f.duration))
 }
 
 /// The fit behind [`shape_fit`], with its noise gains. `F_max` and `t_c = sum / (C_AREA
@@ -107,8 +109,10 @@ pub fn shape_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<(f32
 /// - Otherwise `z = F^(2/3) = F_max^(2/3) sin(pi t / t_c)` is taken as a sinusoid of known
 ///   frequency, so `z_0` and its larger neighbour `z_1` give the offset `theta` of the true
 ///   peak, `tan theta = (z_1/z_0 - cos d) / sin d`, and `F_max = (z_0 / cos theta)^(3/2)` with
-///   `|theta| <= d/2`.
-pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<PeakFit> {
+///   `|theta| <= d/2`. Its noise gains come from the derivatives of this closed form in the
+///   two samples and, through `d = PEAK_OMEGA C_AREA F_max / sum`, in the `samples` samples
+///   of the sum, carried through the three iterations.
+pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -> Option<PeakFit> {
     let [_, before, y0, after, _] = top;
     if !(y0 > 0.0 && sum > 0.0 && y0.is_finite() && sum.is_finite()) {
         return None;
@@ -121,10 +125,27 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<PeakF
         gain2: 1.0,
         weight_sum: 1.0,
     };
+    let (y1, z1) = if zb > za { (after, zb) } else { (before, za) };
+    // `dln F_max / d(ln y_0, ln y_1, ln sum)` of the iterate, from `F_max = y_0`; each step's
+    // `d = PEAK_OMEGA C_AREA F_max / sum` (until it is held at pi) carries the last one's.
+    let mut a = [1.0, 0.0, 0.0];
     for _ in 0..3 {
-        fit.peak = three_point::<M>(z0, za.max(zb), step(fit.duration));
+        let d = step(fit.duration);
+        let top3 = three_point::<M>(z0, z1, d);
+        let kappa = if d < core::f32::consts::PI {
+            top3.kappa
+        } else {
+            0.0
+        };
+        a = [
+            top3.e0 + kappa * a[0],
+            top3.e1 + kappa * a[1],
+            kappa * (a[2] - 1.0),
+        ];
+        fit.peak = top3.peak;
         fit.duration = sum / (C_AREA * fit.peak);
     }
+    (fit.gain2, fit.weight_sum) = three_point_gains(a, fit.peak, y0, y1.min(y0), sum, samples);
     let d = step(fit.duration);
     if five && d <= FIVE_POINT_STEP {
         let mut p = [fit.peak, 0.0, d];
@@ -146,14 +167,70 @@ fn step(duration: f32) -> f32 {
     (PEAK_OMEGA / duration).min(core::f32::consts::PI)
 }
 
+/// The three samples' peak `F = (z_0 sqrt(1 + t^2))^(3/2)` (`t = tan theta`, see
+/// [`peak_fit`]) and how it moves: `e_0 = dln F / dln y_0 = 1 - q`, `e_1 = dln F / dln y_1 =
+/// q` with `q = t r / ((1 + t^2) sin d)` and `r = z_1 / z_0`, and `kappa = dln F / dln d =
+/// (3/2) d t dt/dd / (1 + t^2)` with `dt/dd = (1 - r cos d) / sin^2 d`. Where `t` is held at
+/// 0 (the top sample on the peak) all three derivatives of `t` are 0; at its upper bound
+/// (`z_1 = z_0`, the peak midway) they are the free formulas' limit, since noise takes `z_1`
+/// below `z_0` either way, except past `d = pi/2`, where the bound no longer moves with `d`.
+#[derive(Debug, Clone, Copy)]
+struct ThreePoint {
+    peak: f32,
+    e0: f32,
+    e1: f32,
+    kappa: f32,
+}
+
 /// The peak through the largest `z` sample `z0` and its larger neighbour `z1` with the phase
 /// step `d` (see [`peak_fit`]).
-fn three_point<M: Backend>(z0: f32, z1: f32, d: f32) -> f32 {
+fn three_point<M: Backend>(z0: f32, z1: f32, d: f32) -> ThreePoint {
     let (sh, ch) = math::sin_cos(0.5 * d.min(core::f32::consts::FRAC_PI_2));
     let (s, c) = math::sin_cos(d);
-    let t = ((z1 / z0 - c) / s).max(0.0).min(sh / ch);
+    let r = z1 / z0;
+    let free = (r - c) / s;
+    let t = free.max(0.0).min(sh / ch);
     let b = z0 * M::sqrt(1.0 + t * t);
-    M::pow_3_2(b.max(z0).min(z0 / ch))
+    let moves = free > 0.0 && (free < sh / ch || d < core::f32::consts::FRAC_PI_2);
+    let (q, kappa) = if moves {
+        let one_t2 = 1.0 + t * t;
+        (
+            t * r / (one_t2 * s),
+            1.5 * d * t * (1.0 - r * c) / (one_t2 * s * s),
+        )
+    } else {
+        (0.0, 0.0)
+    };
+    ThreePoint {
+        peak: M::pow_3_2(b.max(z0).min(z0 / ch)),
+        e0: 1.0 - q,
+        e1: q,
+        kappa,
+    }
+}
+
+/// `(gain2, weight_sum)` of the three samples' peak `f` (see [`PeakFit`]) from `a`, the
+/// derivatives of `ln f` in `(ln y_0, ln y_1, ln sum)` carried through the fit's iterations,
+/// the largest sample `y0`, its larger neighbour `y1`, the pulse's `sum` and the `samples` in
+/// it: `dln f / dy_0 = a_0 / y_0 + a_s / sum`, `dln f / dy_1 = a_1 / y_1 + a_s / sum`, and
+/// `a_s / sum` for each other sample; `gain2 = f^2 sum_k (dln f / dy_k)^2`, `weight_sum = f
+/// sum_k dln f / dy_k`.
+fn three_point_gains(a: [f32; 3], f: f32, y0: f32, y1: f32, sum: f32, samples: f32) -> (f32, f32) {
+    let per_sum = a[2] / sum;
+    let g0 = a[0] / y0 + per_sum;
+    let g1 = if y1 > 0.0 {
+        a[1] / y1 + per_sum
+    } else {
+        per_sum
+    };
+    let others = (samples - 2.0).max(0.0);
+    let gain2 = f * f * (g0 * g0 + g1 * g1 + others * per_sum * per_sum);
+    let weight_sum = f * (g0 + g1 + others * per_sum);
+    if gain2.is_finite() && weight_sum.is_finite() {
+        (gain2, weight_sum)
+    } else {
+        (1.0, 1.0)
+    }
 }
 
 /// One Gauss-Newton step of the five-sample fit of `F_max g(d (k - k_peak))` in
