@@ -167,6 +167,45 @@ struct Weighed {
     best_ll: f32,
 }
 
+/// Step in `ln n` of the central difference that takes the phase table's slopes (half its
+/// row step, `ln 1.25 / 2`).
+#[cfg(feature = "sampled_phase")]
+const SLOPE_STEP: f32 = 0.111_571_78;
+
+/// `(var ln F, var ln t_c, cov)` of a measurement's own noise.
+fn own_noise(m: &Measurement) -> (f32, f32, f32) {
+    (
+        m.sigma_ln_force * m.sigma_ln_force,
+        m.sigma_ln_duration * m.sigma_ln_duration,
+        m.cov_ln,
+    )
+}
+
+/// `(var ln F, var ln t_c, cov)` of a measurement's noise as the phase table's correction
+/// reads it. The table is read at the samples per pulse the measured duration gives, so the
+/// duration's noise moves the correction: with its slopes `s_f`, `s_t` in `ln n` (a central
+/// difference between the corrections `up` and `down`, [`SLOPE_STEP`] either side), `ln n`
+/// moves by `d ln t / (1 + s_t)` at the fixed point, the corrected `ln F` by
+/// `d ln F - s_f d ln t / (1 + s_t)` and the corrected `ln t` by `d ln t / (1 + s_t)`
+/// (`1 + s_t` held at 0.5 at least).
+#[cfg(feature = "sampled_phase")]
+fn read_noise(
+    m: &Measurement,
+    up: (f32, f32, f32, f32),
+    down: (f32, f32, f32, f32),
+) -> (f32, f32, f32) {
+    let s_f = (up.0 - down.0) / (2.0 * SLOPE_STEP);
+    let s_t = (up.1 - down.1) / (2.0 * SLOPE_STEP);
+    let g = 1.0 / (1.0 + s_t).max(0.5);
+    let k = -s_f * g;
+    let (mf, mt, mc) = (m.sigma_ln_force, m.sigma_ln_duration, m.cov_ln);
+    (
+        (mf * mf + 2.0 * k * mc + k * k * mt * mt).max(0.0),
+        g * g * mt * mt,
+        g * (mc + k * mt * mt),
+    )
+}
+
 impl<const N: usize, M: Backend> Scene<N, M> {
     /// Classifies a measured pulse.
     ///
@@ -345,7 +384,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// class that states a yield pressure) a measurement stands for: `F_max / force_ratio` and
     /// `t_c / duration_ratio` of the scene's [`crate::ContactCalibration`], each also divided by
     /// the sampling correction at the pulse's samples per pulse (whose spread joins the
-    /// measurement's sigmas); the identity for an undamped elastic contact.
+    /// measurement's sigmas, and where the phase table is read, the measurement's own noise
+    /// carried through the table's slopes in `ln n`, since the measured duration picks where
+    /// it is read); the identity for an undamped elastic contact.
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
         if !self.settings().corrects_sampling() {
@@ -374,14 +415,21 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             ln_n = ln_measured - at(ln_n).1;
         }
         let (lf, lt, sf, st) = at(ln_n);
-        let quad = |a: f32, b: f32| M::sqrt(a * a + b * b);
+        #[cfg(feature = "sampled_phase")]
+        let (var_f, var_t, cov) = if table.at(ln_n, m.asymmetry).is_some() {
+            read_noise(m, at(ln_n + SLOPE_STEP), at(ln_n - SLOPE_STEP))
+        } else {
+            own_noise(m)
+        };
+        #[cfg(not(feature = "sampled_phase"))]
+        let (var_f, var_t, cov) = own_noise(m);
         Measurement {
             peak_force_n: m.peak_force_n / (c.force_ratio * M::exp(lf)),
             duration_s: m.duration_s / (c.duration_ratio * M::exp(lt)),
-            sigma_ln_force: quad(m.sigma_ln_force, sf),
-            sigma_ln_duration: quad(m.sigma_ln_duration, st),
+            sigma_ln_force: M::sqrt(var_f + sf * sf),
+            sigma_ln_duration: M::sqrt(var_t + st * st),
             // The calibration's spread of the peak comes back opposite in the duration too.
-            cov_ln: m.cov_ln - sf * sf,
+            cov_ln: cov - sf * sf,
             asymmetry: m.asymmetry,
         }
     }
