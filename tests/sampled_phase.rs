@@ -10,22 +10,7 @@ use coalshock::sampled_phase::{
 };
 use coalshock::{Measurement, Scene};
 
-/// Gaussian draws from a xorshift generator (Box-Muller), seeded.
-struct Rng(u64);
-
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    fn normal(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
-    }
-}
+mod common;
 
 fn plane(ln_n: f32, a: f32) -> f32 {
     0.05 - 0.02 * ln_n + 0.1 * a
@@ -132,7 +117,7 @@ fn the_duration_noise_moves_the_sampling_correction_and_is_stated() {
         asymmetry: 0.0,
     };
     let stated = scene.hertz_equivalent(&m);
-    let mut rng = Rng(0x51A7_E5EE_D5EE_D001);
+    let mut rng = common::Rng::new(0x51A7_E5EE_D5EE_D001);
     let (mut xs, mut ys) = (Vec::new(), Vec::new());
     let rho = (c / (sf * st)) as f64;
     for _ in 0..20_000 {
