@@ -414,15 +414,18 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         for _ in 0..2 {
             ln_n = ln_measured - at(ln_n).1;
         }
-        let (lf, lt, sf, st) = at(ln_n);
         #[cfg(feature = "sampled_phase")]
-        let (var_f, var_t, cov) = if table.at(ln_n, m.asymmetry).is_some() {
-            read_noise(m, at(ln_n + SLOPE_STEP), at(ln_n - SLOPE_STEP))
-        } else {
-            own_noise(m)
+        let read = table.at(ln_n, m.asymmetry);
+        #[cfg(feature = "sampled_phase")]
+        let ((lf, lt, sf, st), (var_f, var_t, cov)) = match read {
+            Some(v) => (
+                v,
+                read_noise(m, at(ln_n + SLOPE_STEP), at(ln_n - SLOPE_STEP)),
+            ),
+            None => (c.sampled.at(ln_n), own_noise(m)),
         };
         #[cfg(not(feature = "sampled_phase"))]
-        let (var_f, var_t, cov) = own_noise(m);
+        let ((lf, lt, sf, st), (var_f, var_t, cov)) = (at(ln_n), own_noise(m));
         Measurement {
             peak_force_n: m.peak_force_n / (c.force_ratio * M::exp(lf)),
             duration_s: m.duration_s / (c.duration_ratio * M::exp(lt)),
