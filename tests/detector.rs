@@ -512,16 +512,8 @@ fn three_sample_noise_gains_match_monte_carlo() {
                     ls.push((sum as f64).ln());
                 }
             }
-            let n = lf.len() as f64;
-            let (mf, ms) = (lf.iter().sum::<f64>() / n, ls.iter().sum::<f64>() / n);
-            let sf = (lf.iter().map(|v| (v - mf).powi(2)).sum::<f64>() / n).sqrt();
-            let ss = (ls.iter().map(|v| (v - ms).powi(2)).sum::<f64>() / n).sqrt();
-            let cov = lf
-                .iter()
-                .zip(&ls)
-                .map(|(a, b)| (a - mf) * (b - ms))
-                .sum::<f64>()
-                / n;
+            let (vf, vs, cov) = common::variances_and_covariance(&lf, &ls);
+            let (sf, ss) = (vf.sqrt(), vs.sqrt());
             let noise = sigma * 1e4;
             let peak = base.peak as f64;
             let stated_f = noise * (base.gain2 as f64).sqrt() / peak;

@@ -133,16 +133,7 @@ fn the_duration_noise_moves_the_sampling_correction_and_is_stated() {
         xs.push((h.peak_force_n as f64).ln());
         ys.push((h.duration_s as f64).ln());
     }
-    let n = xs.len() as f64;
-    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
-    let vx = xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>() / n;
-    let vy = ys.iter().map(|y| (y - my).powi(2)).sum::<f64>() / n;
-    let cxy = xs
-        .iter()
-        .zip(&ys)
-        .map(|(x, y)| (x - mx) * (y - my))
-        .sum::<f64>()
-        / n;
+    let (vx, vy, cxy) = common::variances_and_covariance(&xs, &ys);
     // The stated noise less the table's own spreads (0.01 and 0.02, and -0.01^2 of covariance).
     let sx = (stated.sigma_ln_force as f64).powi(2) - 1e-4;
     let sy = (stated.sigma_ln_duration as f64).powi(2) - 4e-4;

@@ -1,4 +1,4 @@
-//! Shared by the test files: a seeded generator, Simpson's rule, the textbook impact in f64, and the exact
+//! Shared by the test files: a seeded generator, the moments of a sample of pairs, Simpson's rule, the textbook impact in f64, and the exact
 //! shape of an undamped Hertz impact, integrated here in
 //! f64 from the equation of motion (independent of the kernel and its constants).
 #![allow(dead_code)]
@@ -161,4 +161,19 @@ pub fn simpson(f: impl Fn(f64) -> f64, n: usize) -> f64 {
         acc += if i % 2 == 1 { 4.0 } else { 2.0 } * f(i as f64 * h);
     }
     acc * h / 3.0
+}
+
+/// `(var x, var y, cov(x, y))` of paired draws (population moments, over `n`).
+pub fn variances_and_covariance(xs: &[f64], ys: &[f64]) -> (f64, f64, f64) {
+    let n = xs.len().min(ys.len()).max(1) as f64;
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let vx = xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>() / n;
+    let vy = ys.iter().map(|y| (y - my).powi(2)).sum::<f64>() / n;
+    let cxy = xs
+        .iter()
+        .zip(ys)
+        .map(|(x, y)| (x - mx) * (y - my))
+        .sum::<f64>()
+        / n;
+    (vx, vy, cxy)
 }
