@@ -16,7 +16,7 @@ use serde::Serialize;
 
 use crate::physics::hertz64::HertzImpact64;
 use crate::physics::integrate::{ContactSolution, Method};
-use crate::physics::integrator_cases::{MethodCase, paper_problems};
+use crate::physics::integrator_cases::{MethodCase, PaperProblems};
 use crate::report::best_rate::best_rate;
 use crate::report::ode_solvers_ref::dop853_hertz;
 
@@ -51,11 +51,10 @@ fn hertz_error(sol: &ContactSolution, hertz: &HertzImpact64) -> f64 {
     rebound.max((sol.duration_s / hertz.duration_s - 1.0).abs())
 }
 
-/// The comparison at ode_solvers' `rtol = atol = tol`, timing each solver for about
-/// `seconds` (s).
-pub fn equal_accuracy(tol: f64, seconds: f64) -> Result<EqualAccuracy> {
+/// The comparison on the paper's undamped contact of `p` at ode_solvers' `rtol = atol =
+/// tol`, timing each solver for about `seconds` (s).
+pub fn equal_accuracy(p: &PaperProblems, tol: f64, seconds: f64) -> Result<EqualAccuracy> {
     let failed = || anyhow!("ode_solvers' Dop853 failed at rtol {tol:.0e}");
-    let p = paper_problems()?;
     let (err_v, err_t, ode_solvers_evals) = dop853_hertz(tol).ok_or_else(failed)?;
     let ode_solvers_error = err_v.max(err_t);
     let mut chosen = None;

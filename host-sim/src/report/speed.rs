@@ -243,7 +243,7 @@ pub fn measure(args: &SpeedOptions) -> Result<SpeedReport> {
     }
     let equal_accuracy = BENCH_NEW_TOLERANCES
         .iter()
-        .map(|&tol| equal_accuracy(tol, 2.0 * secs))
+        .map(|&tol| equal_accuracy(&p, tol, 2.0 * secs))
         .collect::<Result<Vec<_>>>()?;
     let mut evaluate = vec![evaluate_speed(&scene, args.impacts, None)?];
     if args.one_thread {
