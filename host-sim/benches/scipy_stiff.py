@@ -66,8 +66,7 @@ def problem(hertz):
         return np.array([[0.0, C], [-p * dm * (1.5 * k * delta ** 0.5 + dc * y[1]), -p * c]])
 
     def force_rate(t, y):
-        g = jac(t, y)[1]
-        return -(g[0] * rhs(t, y)[0] + g[1] * rhs(t, y)[1]) / p
+        return -(jac(t, y)[1] @ rhs(t, y)) / p
 
     def separation(_t, y):
         return y[0]
