@@ -71,11 +71,14 @@ pub fn ratios_in<M: Backend>(speed_ratio: f32) -> Result<YieldRatios, Error> {
     let s2 = s * s;
     let q = M::sqrt(1.2 / s2 - 0.2);
     let d = (1.0 + 2.0 * q) / 3.0;
-    let force = M::powf(s, 0.2) * M::sqrt(1.2 - 0.2 * s2);
+    // `s^(1/5)` and `s^(4/5)` from one fifth root (libm's `powf` works in f64).
+    let s_fifth = crate::math::fifth_root(s);
+    let force = s_fifth * M::sqrt(1.2 - 0.2 * s2);
     let restitution = q * s / M::sqrt(M::sqrt(d));
-    let elastic = 0.4 * incomplete_beta_2_5_1_2(s2, M::powf);
-    let plastic = libm::atanf(M::sqrt(1.2 * (1.0 / s2 - 1.0))) / (M::powf(s, 0.2) * 1.369_306_4);
-    let unloading = q * M::powf(s, 0.8) / (2.0 * restitution * M::sqrt(d));
+    let elastic = 0.4 * incomplete_beta_2_5_1_2::<M>(s2);
+    let plastic = libm::atanf(M::sqrt(1.2 * (1.0 / s2 - 1.0))) / (s_fifth * 1.369_306_4);
+    let unloading =
+        q * (s / s_fifth) / (2.0 * restitution * M::sqrt(d));
     let duration = (elastic + plastic) / CONTACT_TIME_FACTOR + unloading;
     Ok(YieldRatios {
         force: representable(force, "yield force ratio")?,
@@ -86,24 +89,29 @@ pub fn ratios_in<M: Backend>(speed_ratio: f32) -> Result<YieldRatios, Error> {
 
 /// `B(w; 2/5, 1/2) = integral_0^w t^(-3/5) (1 - t)^(-1/2) dt` for `w` in `[0, 1]`: the series
 /// `w^a sum_n (1 - b)_n w^n / (n! (a + n))` for `w <= 1/2`, else `B(a, b) - B(1 - w; b, a)`.
-fn incomplete_beta_2_5_1_2(w: f32, powf: fn(f32, f32) -> f32) -> f32 {
+fn incomplete_beta_2_5_1_2<M: Backend>(w: f32) -> f32 {
     let w = w.max(0.0).min(1.0);
+    let two_fifths = |x: f32| {
+        let f = crate::math::fifth_root(x);
+        f * f
+    };
     if w <= 0.5 {
-        beta_series(w, 0.4, 0.5, powf)
+        beta_series(w, 0.4, 0.5, two_fifths(w))
     } else {
-        BETA_2_5_1_2 - beta_series(1.0 - w, 0.5, 0.4, powf)
+        let v = 1.0 - w;
+        BETA_2_5_1_2 - beta_series(v, 0.5, 0.4, M::sqrt(v))
     }
 }
 
-/// `w^a sum_{n < 40} (1 - b)_n w^n / (n! (a + n))` for `0 <= w <= 1/2`.
-fn beta_series(w: f32, a: f32, b: f32, powf: fn(f32, f32) -> f32) -> f32 {
+/// `w^a sum_{n < 40} (1 - b)_n w^n / (n! (a + n))` for `0 <= w <= 1/2`, given `w_a = w^a`.
+fn beta_series(w: f32, a: f32, b: f32, w_a: f32) -> f32 {
     let (mut term, mut sum) = (1.0_f32, 1.0 / a);
     for n in 0..SERIES_TERMS {
         let nf = n as f32;
         term *= (nf + 1.0 - b) * w / (nf + 1.0);
         sum += term / (a + nf + 1.0);
     }
-    if w > 0.0 { powf(w, a) * sum } else { 0.0 }
+    if w > 0.0 { w_a * sum } else { 0.0 }
 }
 
 #[cfg(test)]
