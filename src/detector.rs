@@ -36,8 +36,13 @@
 //!   pulse whose flanks are too short or that the fit does not describe stays `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
-//! - A sample below the baseline moves it by at most the trigger level (times the weight), so
-//!   a negative EMI spike cannot drag it down.
+//! - A sample below the baseline moves it by at most the level a sample above it must pass to
+//!   start a pulse (the trigger level and, behind a chain, [`RING_SIGMAS`] times the quiet
+//!   RMS; times the weight), so a negative EMI spike cannot drag it down and ringing moves
+//!   it both ways alike.
+//! - Ringing seen before a pulse (behind a chain that is off) goes on through it: its
+//!   variance, at the chain's mode that moves `ln t_c` most, and its covariance joins the
+//!   measurement's (`Detector::ring_noise`).
 //! - Peak between samples ([`peak_fit`]): for the undamped Hertz contact (a scene without a
 //!   contact calibration) from 8 samples per pulse, the least-squares fit of
 //!   the Hertz pulse's shape about its top to the five samples about the largest, in the
@@ -317,13 +322,30 @@ impl Pulse {
     }
 }
 
+/// What ringing before a pulse leaves in its measurement ([`Detector::ring_noise`]): the
+/// variances of `ln F_max` and `ln sum` and their covariance.
+#[derive(Debug, Clone, Copy, Default)]
+struct RingNoise {
+    force2: f32,
+    sum2: f32,
+    shared: f32,
+}
+
+impl RingNoise {
+    /// The variance of `ln t_c = ln sum - ln F_max`.
+    fn duration2(&self) -> f32 {
+        self.sum2 + self.force2 - 2.0 * self.shared
+    }
+}
+
 /// The noise model of one measured pulse (natural-log units, per [`Detector::sigmas`]).
 struct Sigmas {
     /// Standard deviation of `ln F_max`.
     ln_force: f32,
     /// Standard deviation of `ln t_c`.
     ln_duration: f32,
-    /// Noise covariance of `ln sum` and `ln F_max`, `noise^2 weight_sum / (sum F_max)`.
+    /// Covariance of `ln sum` and `ln F_max`: the noise's, `noise^2 weight_sum / (sum F_max)`,
+    /// and the ringing's ([`RingNoise`]).
     shared: f32,
     /// Standard deviation of `ln sum` from the noise.
     area: f32,
@@ -331,7 +353,7 @@ struct Sigmas {
     fit_force: f32,
     /// The fit's own error of `ln t_c`, `FIT_DURATION n^-2.5`.
     fit_duration: f32,
-    /// Variance the ringing before the pulse adds to `ln F_max` and `ln sum` together.
+    /// The shape check's allowance for the ringing before the pulse (a variance of `ln q`).
     ring2: f32,
 }
 
@@ -372,6 +394,10 @@ pub struct Detector<M: Backend = DefaultBackend> {
     ring_weight: f32,
     /// `1 - ring_weight`, the decay per sample of `ring_sum`.
     ring_decay: f32,
+    /// The chain's beam modes in radians per sample, `2 pi f / fs` (the first `ring_modes`):
+    /// where ringing before a pulse is ([`Detector::ring_noise`]).
+    ring_omegas: [f32; crate::equaliser::MAX_MODES],
+    ring_modes: u8,
     /// The quiet signal's mean square about the baseline over `ring_weight / ring_decay`
     /// (counts^2): `S <- (S + v^2) (1 - w)` (see [`ring_sum_step`]).
     ring_sum: f32,
@@ -412,6 +438,11 @@ impl<M: Backend> Detector<M> {
         let noise = sensor.noise_rms_counts * scene.equaliser().noise_gain();
         let adc_noisy = sensor.noise_rms_counts >= 1.0;
         let (ring_weight, ring_decay) = Self::ring_weights(scene.equaliser().is_identity(), fs);
+        let modes = sensor.dynamics.modes();
+        let mut ring_omegas = [0.0; crate::equaliser::MAX_MODES];
+        for (w, mode) in ring_omegas.iter_mut().zip(modes) {
+            *w = core::f32::consts::TAU * mode.frequency_hz / fs;
+        }
         Self {
             trigger: (s.trigger_sigmas * noise).max(2.0),
             release: (s.release_sigmas * noise).max(1.0),
@@ -435,6 +466,8 @@ impl<M: Backend> Detector<M> {
             adc_noisy,
             ring_weight,
             ring_decay,
+            ring_omegas,
+            ring_modes: modes.len() as u8,
             ring_sum: 0.0,
             adc_min: sensor.adc_min,
             adc_max: sensor.adc_max,
@@ -514,9 +547,10 @@ impl<M: Backend> Detector<M> {
                 if (v > self.trigger && self.above_ringing(v)) || sample >= self.adc_max {
                     return self.trigger(sample, value, index, false).or(stuck);
                 }
+                // A sample far below the baseline moves it by at most the level a sample above
+                // it must pass to start a pulse (measured before this sample joins the ringing).
+                let step = self.baseline_step(v);
                 self.track_ringing(v);
-                // A sample far below the baseline moves it by at most the trigger level.
-                let step = if v < -self.trigger { -self.trigger } else { v };
                 self.baseline += step * self.alpha;
                 // Ring of the last PRE_TRIGGER samples (a power of two: the mask keeps the
                 // index in bounds, so the check compiles away).
@@ -575,7 +609,6 @@ impl<M: Backend> Detector<M> {
         let weighted_k2 = k2 * self.ring_scale();
         let mut ms = self.ring_sum;
         let (trigger, alpha, adc_max) = (self.trigger, self.alpha, self.adc_max);
-        let floor = -trigger;
         // Stop before the repeat that completes a stuck run: `feed` reports it.
         let limit = self.stuck_limit.wrapping_sub(1);
         let (mut baseline, mut previous, mut run, mut next) =
@@ -595,10 +628,11 @@ impl<M: Backend> Detector<M> {
                 previous = x;
                 run = 0;
             }
+            let step = clamp_low::<M>(v, trigger, if RING { weighted_k2 * ms } else { 0.0 });
             if RING {
                 ms = ring_sum_step(ms, decay, v);
             }
-            baseline += if v < floor { floor } else { v } * alpha;
+            baseline += step * alpha;
             if let Some(slot) = self.pre.get_mut(next & (PRE_TRIGGER - 1)) {
                 *slot = value;
             }
@@ -831,9 +865,22 @@ impl<M: Backend> Detector<M> {
     }
 
     fn track_baseline(&mut self, value: f32) {
-        let v = value - self.baseline;
-        let step = if v < -self.trigger { -self.trigger } else { v };
+        let step = self.baseline_step(value - self.baseline);
         self.baseline += step * self.alpha;
+    }
+
+    /// How far a quiet sample `v` (counts above the baseline) moves the baseline, before the
+    /// weight: `v`, but at most the level a sample must pass to start a pulse below it
+    /// ([`clamp_low`]), so that a negative spike cannot drag the baseline down, and ringing
+    /// the trigger waits out moves it both ways alike.
+    #[inline(always)]
+    fn baseline_step(&self, v: f32) -> f32 {
+        let ring_ms = if self.ring_weight > 0.0 {
+            RING_SIGMAS * RING_SIGMAS * self.ring_ms()
+        } else {
+            0.0
+        };
+        clamp_low::<M>(v, self.trigger, ring_ms)
     }
 
     /// Starts a pulse with the pre-trigger samples, oldest first.
@@ -1108,21 +1155,23 @@ impl<M: Backend> Detector<M> {
         let noise_force = self.noise * M::sqrt(gain2) / peak;
         let sigma_area = self.noise * M::sqrt(n) / p.sum;
         let shared = self.noise * self.noise * weight_sum / (p.sum * peak);
-        // Ringing seen before the pulse goes on through it, coherently: it moves the peak by
-        // its amplitude (`sqrt 2` RMS) and the area by up to that over all `n` samples.
+        // The shape check's allowance for the ringing seen before the pulse: its amplitude
+        // (`sqrt 2` RMS, and a half more) on the peak and on all `n` samples of the sum.
         let (ring_force, ring_area) = (
             1.5 * p.excess / peak,
             1.5 * p.excess * n / p.sum.max(f32::MIN_POSITIVE),
         );
         let ring2 = ring_force * ring_force + ring_area * ring_area;
-        let ln_force =
-            M::sqrt(noise_force * noise_force + fit_force * fit_force + ring_force * ring_force);
+        // What the same ringing leaves in the measurement, at its own frequency.
+        let ring = self.ring_noise(peak);
+        let ln_force = M::sqrt(noise_force * noise_force + fit_force * fit_force + ring.force2);
         // `ln t_c = ln sum - ln F_max`: the variance of the difference of the two.
         let ln_duration = M::sqrt(
             (sigma_area * sigma_area + noise_force * noise_force - 2.0 * shared).max(0.0)
                 + fit_duration * fit_duration
-                + ring2,
+                + ring.duration2().max(0.0),
         );
+        let shared = shared + ring.shared;
         Sigmas {
             ln_force,
             ln_duration,
@@ -1132,6 +1181,53 @@ impl<M: Backend> Detector<M> {
             fit_duration,
             ring2,
         }
+    }
+
+    /// What ringing seen before the pulse (RMS `excess` above the noise) leaves in the
+    /// measured `ln F_max` and `ln sum` of a pulse of `peak` counts: a sinusoid of random
+    /// phase at `theta` radians per sample, going on through the pulse's `n` summed samples
+    /// whose middle lies `m` samples after the peak, moves the peak by `x = e sin phi / peak`
+    /// (`e` the RMS times `sqrt 2`) and the sum by
+    /// `y = e (D cos(theta m) sin phi + D sin(theta m) cos phi) / sum`, with
+    /// `D = sin(theta n / 2) / sin(theta / 2)`. Over the phase:
+    /// `var x = excess^2 / peak^2`, `var y = excess^2 D^2 / sum^2`,
+    /// `cov(x, y) = excess^2 D cos(theta m) / (peak sum)`. Behind a chain the ringing is at its
+    /// beam modes' frequencies (an off equaliser's own poles lie just below them), in a mix
+    /// the node does not know: the mode that moves `ln t_c = ln sum - ln F_max` most is taken.
+    /// Without modes it is a slow offset (`theta -> 0`, `D = n`). Zero without ringing.
+    #[inline(always)]
+    fn ring_noise(&self, peak: f32) -> RingNoise {
+        let p = &self.pulse;
+        if p.excess <= 0.0 {
+            return RingNoise::default();
+        }
+        let (n, sum) = (p.samples as f32, p.sum.max(f32::MIN_POSITIVE));
+        // Samples after the peak: fewer than `max_samples`, a `u32`.
+        let after = self.next_index.wrapping_sub(1).wrapping_sub(p.max_at) as u32 as f32;
+        let m = after - 0.5 * (n - 1.0);
+        let e2 = p.excess * p.excess;
+        let force2 = e2 / (peak * peak);
+        let of = |d: f32, c: f32| RingNoise {
+            force2,
+            sum2: e2 * d * d / (sum * sum),
+            shared: e2 * d * c / (peak * sum),
+        };
+        let slow = of(n, 1.0);
+        let omegas = self
+            .ring_omegas
+            .get(..self.ring_modes as usize)
+            .unwrap_or(&[]);
+        let mut worst: Option<RingNoise> = None;
+        for &w in omegas {
+            let (half, _) = crate::math::sin_cos_any(0.5 * w);
+            let (wide, _) = crate::math::sin_cos_any(0.5 * w * n);
+            let (_, c) = crate::math::sin_cos_any(w * m);
+            let r = of(wide / half.max(f32::MIN_POSITIVE), c);
+            if worst.is_none_or(|b| r.duration2() > b.duration2()) {
+                worst = Some(r);
+            }
+        }
+        worst.unwrap_or(slow)
     }
 
     /// The sigmas of `ln F_max` and `ln t_c` a measurement states: the noise model's `s`, less
@@ -1225,6 +1321,21 @@ fn plain_area(s: &crate::scene::Settings) -> bool {
 #[cfg(not(feature = "plasticity"))]
 fn plain_area(_: &crate::scene::Settings) -> bool {
     true
+}
+
+/// A quiet sample `v` (counts above the baseline) as the baseline takes it: `v`, but no lower
+/// than `-max(trigger, sqrt(level2))`, the mirror of the level a sample must pass to start a
+/// pulse (`level2`: `RING_SIGMAS^2` times the quiet mean square behind a chain, else 0).
+/// Clamping below at the trigger alone let ringing louder than the trigger lift the baseline:
+/// its crests moved it fully and its troughs by the trigger level, and every pulse on it
+/// then read low.
+#[inline(always)]
+fn clamp_low<M: Backend>(v: f32, trigger: f32, level2: f32) -> f32 {
+    if v >= -trigger || v * v <= level2 {
+        v
+    } else {
+        -trigger.max(M::sqrt(level2))
+    }
 }
 
 /// One quiet sample `v` into the scaled mean square `sum` (`ms (1 - w) / w`, see

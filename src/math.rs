@@ -238,6 +238,23 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     (s, sign * c)
 }
 
+/// `(sin x, cos x)` for any finite `x`: reduced to `[-pi, pi]` by whole turns (in f32, so
+/// the error grows as `|x| 6e-8` beside [`sin_cos`]'s), then [`sin_cos`] on `|x|`
+/// (`sin` is odd, `cos` even). Past `2^31` turns, or not finite: `(0, 1)`.
+#[inline(never)]
+pub fn sin_cos_any(x: f32) -> (f32, f32) {
+    use core::f32::consts::{PI, TAU};
+    let turns = x / TAU;
+    if !turns.is_finite() || turns.abs() >= 2.0e9 {
+        return (0.0, 1.0);
+    }
+    // The nearest whole turn, without libm.
+    let whole = (turns + if turns < 0.0 { -0.5 } else { 0.5 }) as i32 as f32;
+    let r = (x - whole * TAU).max(-PI).min(PI);
+    let (s, c) = sin_cos(r.abs());
+    (if r < 0.0 { -s } else { s }, c)
+}
+
 #[cfg(test)]
 mod tests {
     #[test]
@@ -251,6 +268,32 @@ mod tests {
                 .max((c as f64 - x.cos()).abs());
         }
         assert!(worst < 3e-7, "{worst}");
+    }
+
+    #[test]
+    fn sin_cos_any_matches_f64_over_many_turns() {
+        let mut worst = 0.0f64;
+        for i in -20_000..=20_000 {
+            let x = (i as f32) * 0.0031;
+            let (s, c) = super::sin_cos_any(x);
+            let xd = x as f64;
+            let err = (s as f64 - xd.sin()).abs().max((c as f64 - xd.cos()).abs());
+            // f32 rounding of the reduction: a few ulps of |x|.
+            worst = worst.max(err / (3e-7 + 2.4e-7 * xd.abs()));
+        }
+        assert!(worst <= 1.0, "{worst}");
+        assert_eq!(super::sin_cos_any(f32::NAN), (0.0, 1.0));
+    }
+
+    #[test]
+    fn cbrt_matches_f64() {
+        let mut worst = 0.0f64;
+        for i in 0..=100_000 {
+            let x = 10f64.powf(-30.0 + 60.0 * i as f64 / 100_000.0);
+            let c = super::cbrt(x as f32) as f64;
+            worst = worst.max((c / (x as f32 as f64).cbrt() - 1.0).abs());
+        }
+        assert!(worst < 2.4e-7, "{worst}");
     }
 
     #[test]
