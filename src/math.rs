@@ -192,7 +192,7 @@ pub fn cbrt(x: f32) -> f32 {
 /// relative, tested). A subnormal `x` is scaled by `2^40` and its root back by `2^-8`; zero,
 /// negative and non-finite `x` return `x`. It gives the Hertz law's `u^(4/5)` and `ratio^(2/5)`
 /// without libm's `powf` (which works in f64: about 1.4 KB of flash on a Cortex-M4F).
-#[inline]
+#[inline(never)]
 pub fn fifth_root(x: f32) -> f32 {
     if x <= 0.0 || !x.is_finite() {
         return x;

@@ -77,8 +77,7 @@ pub fn ratios_in<M: Backend>(speed_ratio: f32) -> Result<YieldRatios, Error> {
     let restitution = q * s / M::sqrt(M::sqrt(d));
     let elastic = 0.4 * incomplete_beta_2_5_1_2::<M>(s2);
     let plastic = libm::atanf(M::sqrt(1.2 * (1.0 / s2 - 1.0))) / (s_fifth * 1.369_306_4);
-    let unloading =
-        q * (s / s_fifth) / (2.0 * restitution * M::sqrt(d));
+    let unloading = q * (s / s_fifth) / (2.0 * restitution * M::sqrt(d));
     let duration = (elastic + plastic) / CONTACT_TIME_FACTOR + unloading;
     Ok(YieldRatios {
         force: representable(force, "yield force ratio")?,
@@ -89,6 +88,7 @@ pub fn ratios_in<M: Backend>(speed_ratio: f32) -> Result<YieldRatios, Error> {
 
 /// `B(w; 2/5, 1/2) = integral_0^w t^(-3/5) (1 - t)^(-1/2) dt` for `w` in `[0, 1]`: the series
 /// `w^a sum_n (1 - b)_n w^n / (n! (a + n))` for `w <= 1/2`, else `B(a, b) - B(1 - w; b, a)`.
+#[inline(never)]
 fn incomplete_beta_2_5_1_2<M: Backend>(w: f32) -> f32 {
     let w = w.max(0.0).min(1.0);
     let two_fifths = |x: f32| {
@@ -104,6 +104,7 @@ fn incomplete_beta_2_5_1_2<M: Backend>(w: f32) -> f32 {
 }
 
 /// `w^a sum_{n < 40} (1 - b)_n w^n / (n! (a + n))` for `0 <= w <= 1/2`, given `w_a = w^a`.
+#[inline(never)]
 fn beta_series(w: f32, a: f32, b: f32, w_a: f32) -> f32 {
     let (mut term, mut sum) = (1.0_f32, 1.0 / a);
     for n in 0..SERIES_TERMS {
