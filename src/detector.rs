@@ -609,6 +609,7 @@ impl<M: Backend> Detector<M> {
         let weighted_k2 = k2 * self.ring_scale();
         let mut ms = self.ring_sum;
         let (trigger, alpha, adc_max) = (self.trigger, self.alpha, self.adc_max);
+        let floor = -trigger;
         // Stop before the repeat that completes a stuck run: `feed` reports it.
         let limit = self.stuck_limit.wrapping_sub(1);
         let (mut baseline, mut previous, mut run, mut next) =
@@ -628,7 +629,14 @@ impl<M: Backend> Detector<M> {
                 previous = x;
                 run = 0;
             }
-            let step = clamp_low::<M>(v, trigger, if RING { weighted_k2 * ms } else { 0.0 });
+            // Behind a rigid chain the level is the trigger's alone: one select.
+            let step = if RING {
+                clamp_low::<M>(v, trigger, || weighted_k2 * ms)
+            } else if v < floor {
+                floor
+            } else {
+                v
+            };
             if RING {
                 ms = ring_sum_step(ms, decay, v);
             }
@@ -875,12 +883,13 @@ impl<M: Backend> Detector<M> {
     /// the trigger waits out moves it both ways alike.
     #[inline(always)]
     fn baseline_step(&self, v: f32) -> f32 {
-        let ring_ms = if self.ring_weight > 0.0 {
-            RING_SIGMAS * RING_SIGMAS * self.ring_ms()
-        } else {
-            0.0
-        };
-        clamp_low::<M>(v, self.trigger, ring_ms)
+        clamp_low::<M>(v, self.trigger, || {
+            if self.ring_weight > 0.0 {
+                RING_SIGMAS * RING_SIGMAS * self.ring_ms()
+            } else {
+                0.0
+            }
+        })
     }
 
     /// Starts a pulse with the pre-trigger samples, oldest first.
@@ -1325,13 +1334,18 @@ fn plain_area(_: &crate::scene::Settings) -> bool {
 
 /// A quiet sample `v` (counts above the baseline) as the baseline takes it: `v`, but no lower
 /// than `-max(trigger, sqrt(level2))`, the mirror of the level a sample must pass to start a
-/// pulse (`level2`: `RING_SIGMAS^2` times the quiet mean square behind a chain, else 0).
+/// pulse (`level2()`: `RING_SIGMAS^2` times the quiet mean square behind a chain, else 0;
+/// evaluated only for a sample below `-trigger`, so a quiet sample costs one comparison).
 /// Clamping below at the trigger alone let ringing louder than the trigger lift the baseline:
 /// its crests moved it fully and its troughs by the trigger level, and every pulse on it
 /// then read low.
 #[inline(always)]
-fn clamp_low<M: Backend>(v: f32, trigger: f32, level2: f32) -> f32 {
-    if v >= -trigger || v * v <= level2 {
+fn clamp_low<M: Backend>(v: f32, trigger: f32, level2: impl FnOnce() -> f32) -> f32 {
+    if v >= -trigger {
+        return v;
+    }
+    let level2 = level2();
+    if v * v <= level2 {
         v
     } else {
         -trigger.max(M::sqrt(level2))
