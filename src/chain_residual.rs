@@ -19,8 +19,8 @@
 //!
 //! The rigid pulse has the same with `R = 1` and `H = 1`. [`crate::shape_fit::shape_fit`] reads each
 //! (the largest sample, two samples either side of it and the sum), at [`PHASES`] sample phases; the
-//! mean over phases of `ln(fit of y / fit of P)` is the bias, and its spread over phases
-//! joins the measurement's noise. The integral is a trapezoid rule in `v`, step
+//! mean over phases of `ln(fit of y / fit of P)` is the bias, and the spread over phases of
+//! `ln(fit of y)` joins the measurement's noise (in place of the fit's generic bound). The integral is a trapezoid rule in `v`, step
 //! [`crate::chain_bias::STEP_V`] up to [`crate::chain_bias::MAX_V`], as the chain's bound takes
 //! it. Points at [`SMOOTH_FROM_SAMPLES`] samples per pulse or more are left at 0: the fit's
 //! error there is below 1e-3 and a scene whose every pulse is that long is read by the
@@ -80,8 +80,12 @@ pub fn residual(
     out
 }
 
-/// `[mean ln F, mean ln t, spread ln F, spread ln t]` of the fit of the equalised pulse over
-/// the rigid one's, at `n` samples per pulse.
+/// `[mean ln F, mean ln t, spread ln F, spread ln t]` at `n` samples per pulse: the mean over
+/// phases of the fit of the equalised pulse over the rigid one's, and the spread over phases
+/// of the equalised pulse's fit itself. The spread is the whole error the fit leaves at that
+/// phase, its own sampling error included: the detector states that error through this
+/// correction in place of its generic bound, and the equaliser's reshaping partly cancels it
+/// (behind the 6.3 kHz MEMS band the spread of the ratio to the rigid fit overstated it).
 #[inline(never)]
 fn point(
     dynamics: &ChainDynamics,
@@ -92,7 +96,7 @@ fn point(
     let t_c = n / sample_rate_hz;
     let weights = weights(dynamics, design, n, t_c);
     let aliases = aliases(dynamics, sample_rate_hz, n);
-    let (mut sum, mut sum2) = ([0.0f32; 2], [0.0f32; 2]);
+    let (mut sum, mut own, mut own2) = ([0.0f32; 2], [0.0f32; 2], [0.0f32; 2]);
     let mut count = 0.0f32;
     for p in 0..PHASES {
         let phase = (p as f32 + 0.5) / PHASES as f32 - 0.5;
@@ -104,10 +108,13 @@ fn point(
         };
         for i in 0..2 {
             let (c, r) = (chain.get(i).copied(), rigid.get(i).copied());
-            let d = M::ln(c.unwrap_or(1.0) / r.unwrap_or(1.0));
-            if let (Some(s), Some(s2)) = (sum.get_mut(i), sum2.get_mut(i)) {
+            let c = M::ln(c.unwrap_or(1.0));
+            let d = c - M::ln(r.unwrap_or(1.0));
+            if let (Some(s), Some(o), Some(o2)) = (sum.get_mut(i), own.get_mut(i), own2.get_mut(i))
+            {
                 *s += d;
-                *s2 += d * d;
+                *o += c;
+                *o2 += c * c;
             }
         }
         count += 1.0;
@@ -117,8 +124,8 @@ fn point(
     }
     let mean = sum.map(|s| s / count);
     let spread = |i: usize| {
-        let m = mean.get(i).copied().unwrap_or(0.0);
-        let s2 = sum2.get(i).copied().unwrap_or(0.0);
+        let m = own.get(i).copied().unwrap_or(0.0) / count;
+        let s2 = own2.get(i).copied().unwrap_or(0.0);
         M::sqrt((s2 / count - m * m).max(0.0))
     };
     let [lf, lt] = mean;

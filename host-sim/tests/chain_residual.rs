@@ -2,7 +2,8 @@
 //! spectral integral and Poisson's sum) against a second method: Hertz pulses sampled through
 //! host-sim's exact chain (its state-space integration), equalised by the kernel's equaliser,
 //! and fitted by the kernel's fit, against the same pulses on a rigid chain, at 16 sample
-//! phases.
+//! phases; and the spread over those phases of the equalised pulse's own fit, which the
+//! kernel states as the correction's spread.
 
 mod common;
 
@@ -40,22 +41,34 @@ fn fitted(chain: &SensorSpec, n: f64, phase: f64) -> (f64, f64) {
     ((f as f64).ln(), (t as f64).ln())
 }
 
-/// Mean over phases of the chain's fit over the rigid one's, `(d ln F, d ln t)`.
-fn measured(chain: &SensorSpec, n: f64) -> (f64, f64) {
+/// Over phases: the mean of the chain's fit over the rigid one's, `(d ln F, d ln t)`, and the
+/// spread of the chain's fit itself, `(sigma ln F, sigma ln t)`.
+fn measured(chain: &SensorSpec, n: f64) -> ((f64, f64), (f64, f64)) {
     let rigid = common::chain_spec(chain.sample_rate_hz, &[], None);
     let (mut df, mut dt) = (0.0, 0.0);
+    let (mut own_f, mut own_t) = (Vec::new(), Vec::new());
     for p in 0..PHASES {
         let phase = (p as f64 + 0.5) / PHASES as f64;
         let (cf, ct) = fitted(chain, n, phase);
         let (rf, rt) = fitted(&rigid, n, phase);
         df += cf - rf;
         dt += ct - rt;
+        own_f.push(cf);
+        own_t.push(ct);
     }
-    (df / PHASES as f64, dt / PHASES as f64)
+    let spread = |v: &[f64]| {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / v.len() as f64).sqrt()
+    };
+    (
+        (df / PHASES as f64, dt / PHASES as f64),
+        (spread(&own_f), spread(&own_t)),
+    )
 }
 
-/// Every point below the smoothed-top threshold within `rel` of the measured bias plus
-/// `abs`; the points above it 0.
+/// Every point below the smoothed-top threshold: the bias within `rel` of the measured one
+/// plus `abs`, and the spread within a fifth of the measured one plus `abs` (the kernel takes
+/// 8 phases, this 16); the points above it 0.
 fn check(chain: &SensorSpec, rel: f64, abs: f64) {
     let fs = chain.sample_rate_hz;
     let k = sensor_to_kernel(chain).unwrap();
@@ -64,10 +77,15 @@ fn check(chain: &SensorSpec, rel: f64, abs: f64) {
     let mut n = SAMPLED_FIRST_N as f64;
     for i in 0..SAMPLED_POINTS {
         let (lf, lt) = (table.ln_force[i] as f64, table.ln_duration[i] as f64);
+        let (sf, st) = (
+            table.sigma_ln_force[i] as f64,
+            table.sigma_ln_duration[i] as f64,
+        );
         if n < SMOOTH_FROM_SAMPLES as f64 {
-            let (mf, mt) = measured(chain, n);
+            let ((mf, mt), (msf, mst)) = measured(chain, n);
             println!(
-                "n {n:5.2}: ln F {lf:+.4} (measured {mf:+.4}), ln t {lt:+.4} (measured {mt:+.4})"
+                "n {n:5.2}: ln F {lf:+.4} (measured {mf:+.4}), ln t {lt:+.4} (measured {mt:+.4}); \
+                 spread ln F {sf:.4} ({msf:.4}), ln t {st:.4} ({mst:.4})"
             );
             assert!(
                 (lf - mf).abs() <= rel * mf.abs() + abs,
@@ -76,6 +94,14 @@ fn check(chain: &SensorSpec, rel: f64, abs: f64) {
             assert!(
                 (lt - mt).abs() <= rel * mt.abs() + abs,
                 "n {n}: ln t {lt} vs {mt}"
+            );
+            assert!(
+                (sf - msf).abs() <= 0.2 * msf + abs,
+                "n {n}: sigma ln F {sf} vs {msf}"
+            );
+            assert!(
+                (st - mst).abs() <= 0.2 * mst + abs,
+                "n {n}: sigma ln t {st} vs {mst}"
             );
         } else {
             assert_eq!((lf, lt), (0.0, 0.0));
