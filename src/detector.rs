@@ -1221,7 +1221,6 @@ impl<M: Backend> Detector<M> {
             sum2: e2 * d * d / (sum * sum),
             shared: e2 * d * c / (peak * sum),
         };
-        let slow = of(n, 1.0);
         let omegas = self
             .ring_omegas
             .get(..self.ring_modes as usize)
@@ -1236,7 +1235,7 @@ impl<M: Backend> Detector<M> {
                 worst = Some(r);
             }
         }
-        worst.unwrap_or(slow)
+        worst.unwrap_or_else(|| of(n, 1.0))
     }
 
     /// The sigmas of `ln F_max` and `ln t_c` a measurement states: the noise model's `s`, less

@@ -91,12 +91,9 @@ pub fn ratios_in<M: Backend>(speed_ratio: f32) -> Result<YieldRatios, Error> {
 #[inline(never)]
 fn incomplete_beta_2_5_1_2<M: Backend>(w: f32) -> f32 {
     let w = w.max(0.0).min(1.0);
-    let two_fifths = |x: f32| {
-        let f = crate::math::fifth_root(x);
-        f * f
-    };
     if w <= 0.5 {
-        beta_series(w, 0.4, 0.5, two_fifths(w))
+        let fifth = crate::math::fifth_root(w);
+        beta_series(w, 0.4, 0.5, fifth * fifth)
     } else {
         let v = 1.0 - w;
         BETA_2_5_1_2 - beta_series(v, 0.5, 0.4, M::sqrt(v))

@@ -13,6 +13,7 @@ use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
 use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 use coalshock::shape_fit::five_about;
+use host_sim::bridge::sampled_fit::mean_and_sigma;
 use host_sim::convert::sensor_to_kernel;
 use host_sim::scene::SensorSpec;
 
@@ -56,13 +57,9 @@ fn measured(chain: &SensorSpec, n: f64) -> ((f64, f64), (f64, f64)) {
         own_f.push(cf);
         own_t.push(ct);
     }
-    let spread = |v: &[f64]| {
-        let m = v.iter().sum::<f64>() / v.len() as f64;
-        (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / v.len() as f64).sqrt()
-    };
     (
         (df / PHASES as f64, dt / PHASES as f64),
-        (spread(&own_f), spread(&own_t)),
+        (mean_and_sigma(&own_f).1, mean_and_sigma(&own_t).1),
     )
 }
 
