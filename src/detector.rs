@@ -10,9 +10,10 @@
 //! - Duration from the area: the area of the Hertz pulse is the impulse `2 m u`, and with
 //!   `t_c = 2.9432752 delta_max / u` and `F_max delta_max = (5/4) m u^2` that is
 //!   `C_AREA F_max t_c` with `C_AREA = 1.6 / 2.9432752 = 0.543612`, so
-//!   `t_c = area / (C_AREA F_max)`: unbiased by amplitude, unlike a threshold width. A
-//!   contact whose pulse has another shape (a yielding one is flatter) states its area
-//!   relative to Hertz's, `Settings::area_ratio`, and `t_c = area / (C_AREA area_ratio F_max)`.
+//!   `t_c = area / (C_AREA F_max)`: unbiased by amplitude, unlike a threshold width. For a
+//!   contact whose pulse has another shape (a damped or a yielding one) this is the duration
+//!   of the Hertz pulse with the same peak and area, which the contact's envelope or
+//!   calibration states (for Thornton's yield, [`crate::thornton::YieldRatios::area_duration`]).
 //! - Shape check: the pulse's energy `sum v^2 dt` is `C_ENERGY F_max^2 t_c` with
 //!   `C_ENERGY = 2 B(8/5, 1/2) / (2.5 * 2.9432752) = 0.411342`, so `t_energy = energy /
 //!   (C_ENERGY F_max^2)` must equal `t_area`; `q = t_energy / t_area` drops for two impacts
@@ -369,9 +370,6 @@ pub struct Detector<M: Backend = DefaultBackend> {
     skewness: f32,
     smooth: usize,
     shape_ratio: f32,
-    /// `Settings::area_ratio` (feature `plasticity`).
-    #[cfg(feature = "plasticity")]
-    area_ratio: f32,
     /// `Settings::flat_top_ratio` (feature `plasticity`).
     #[cfg(feature = "plasticity")]
     flat_top_ratio: f32,
@@ -452,8 +450,6 @@ impl<M: Backend> Detector<M> {
             skewness: s.contact.skewness,
             smooth: smooth_width(short * fs),
             shape_ratio: s.contact.shape_ratio,
-            #[cfg(feature = "plasticity")]
-            area_ratio: s.area_ratio,
             #[cfg(feature = "plasticity")]
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
@@ -1038,9 +1034,6 @@ impl<M: Backend> Detector<M> {
         else {
             return reject(RejectReason::Implausible);
         };
-        // The fit reads the area with the Hertz shape; the contact's own pulse may be flatter.
-        #[cfg(feature = "plasticity")]
-        let duration = duration / self.area_ratio;
         if let Some(r) = self.flaw_of_top(peak, duration) {
             return reject(r);
         }
@@ -1322,7 +1315,7 @@ impl<M: Backend> Detector<M> {
 /// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).
 #[cfg(feature = "plasticity")]
 fn plain_area(s: &crate::scene::Settings) -> bool {
-    s.area_ratio == 1.0 && s.flat_top_ratio == 1.0
+    s.flat_top_ratio == 1.0
 }
 
 /// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).

@@ -7,7 +7,9 @@
 //! `phi_F = ln(F/F_Hertz)` and `phi_t = ln(t_c/t_Hertz)` functions of `s` alone:
 //!
 //! - Thornton's yield ([`crate::thornton`]): the ratios depend on `u / V_y` alone, so
-//!   `(a, b) = (0, 1)`; filled at scene build from the closed forms ([`RatioMap::thornton`]).
+//!   `(a, b) = (0, 1)`; filled at scene build from the closed forms ([`RatioMap::thornton`]),
+//!   with `phi_t` the duration the detector reads from the pulse's area,
+//!   `ln(t_A / t_Hertz)` ([`crate::thornton::YieldRatios::area_duration`]).
 //! - A damped law with a fixed damping coefficient (MSC Adams IMPACT with a fixed `c_max`):
 //!   scaled by `delta* = (m u^2 / k)^(2/5)` and `t* = delta*/u`, the contact is
 //!   `delta'' = -delta^1.5 - Lambda delta'` with `Lambda = c delta* / (m u)`, and with
@@ -112,7 +114,8 @@ impl RatioMap {
 
     /// The map of a class with Thornton's yield speed `yield_speed_m_s`
     /// ([`crate::thornton::yield_speed_in`]) over `ln_speed = (ln u0, ln u1)` (`u` in m/s):
-    /// `s = ln u`, the ratios at `V_y / u` ([`crate::thornton::ratios_in`]).
+    /// `s = ln u`, the ratios `force` and `area_duration` at `V_y / u`
+    /// ([`crate::thornton::ratios_in`]).
     #[cfg(feature = "plasticity")]
     pub fn thornton<M: Backend>(yield_speed_m_s: f32, ln_speed: (f32, f32)) -> Result<Self, Error> {
         let ln_vy = M::ln(positive(yield_speed_m_s, "yield speed")?);
@@ -123,7 +126,7 @@ impl RatioMap {
         for (k, (f, t)) in lf.iter_mut().zip(lt.iter_mut()).enumerate() {
             let r = ratios_in::<M>(M::exp(ln_vy - (y0 + k as f32 * step)))?;
             *f = M::ln(r.force);
-            *t = M::ln(r.duration);
+            *t = M::ln(r.area_duration);
         }
         Self::new((0.0, 1.0), ln_speed, lf, lt)
             .map_err(|_| Error::OutOfRange("yield_pressure_pa (map not invertible)"))

@@ -208,13 +208,6 @@ pub struct Settings {
     /// ([`ContactCalibration::skewness`]) beyond the sampling and noise allowance, above which
     /// the pulse is `Misshapen` (two impacts with unequal peaks within one contact).
     pub skew_tolerance: f32,
-    /// Area of the contact's pulse over `F_max t_c`, relative to the Hertz pulse's `C_AREA`
-    /// (1 for the Hertz shape; a yielding pulse is flatter, about 1.12 for the paper's coal at
-    /// 30 MPa): the detector reads `t_c = area / (C_AREA area_ratio F_max)`, so that its
-    /// duration is the pulse's own. Dimensionless, in `1e-3..1e3`. With the `plasticity`
-    /// feature only.
-    #[cfg(feature = "plasticity")]
-    pub area_ratio: f32,
     /// How much broader, as a share of its duration, the contact's pulse top is than the Hertz
     /// pulse's (the time within 2 % of the peak; 1 for Hertz, 2-3 for a yielding pulse):
     /// the run of identical samples at a pulse's maximum that makes it `Saturated` is this
@@ -301,8 +294,6 @@ impl Default for Settings {
             spike_fraction: 0.3,
             skew_tolerance: 0.05,
             #[cfg(feature = "plasticity")]
-            area_ratio: 1.0,
-            #[cfg(feature = "plasticity")]
             flat_top_ratio: 1.0,
             #[cfg(feature = "sampled_phase")]
             sampled_phase: SampledPhase::NONE,
@@ -357,9 +348,6 @@ impl Settings {
         }
         #[cfg(feature = "plasticity")]
         {
-            if !(1e-3..=1e3).contains(&self.area_ratio) {
-                return Err(Error::OutOfRange("area_ratio"));
-            }
             if !(1.0..=1e3).contains(&self.flat_top_ratio) {
                 return Err(Error::OutOfRange("flat_top_ratio"));
             }

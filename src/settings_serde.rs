@@ -3,7 +3,7 @@
 //! `duration_ratio`, `shape_ratio`, `skewness`), a key not given keeping
 //! [`Settings::default`]'s value and an unknown key refused by name.
 //!
-//! The sampled calibration, `area_ratio` and `flat_top_ratio` are computed (by host-sim's
+//! The sampled calibration and `flat_top_ratio` are computed (by host-sim's
 //! calibration), not stated: they are not keys, and keep their defaults when read. A TOML or
 //! JSON number is read as `f64` and rounded to the nearest `f32` (serde's `as` cast). Writing
 //! gives every key, so reading back gives the same settings but for those computed fields.

@@ -1075,7 +1075,6 @@ fn settings_field() -> impl Strategy<Value = Settings> {
                 contact: coalshock::ContactCalibration::HERTZ,
                 spike_fraction: 0.3,
                 skew_tolerance: 0.05,
-                area_ratio: 1.0,
                 flat_top_ratio: 1.0,
                 sampled_phase: coalshock::SampledPhase::NONE,
             },

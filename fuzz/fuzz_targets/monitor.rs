@@ -190,7 +190,6 @@ impl Bytes<'_> {
             },
             skew_tolerance: self.f32_in(0.01, 1.0),
             spike_fraction: self.f32_in(0.05, 3.0),
-            area_ratio: self.f32_in(0.8, 1.3),
             flat_top_ratio: self.f32_in(1.0, 3.0),
             // Mostly small grids: a 256-cell grid with four classes takes long to build.
             separability_grid: match self.u8() {

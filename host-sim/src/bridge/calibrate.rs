@@ -7,10 +7,10 @@
 //!   (1 for the Hertz pulse).
 //!
 //! For a class whose contact yields (Thornton's law) the reference is the kernel's own model of
-//! it, Thornton's undamped closed forms `F*` and `t_c` ([`ThorntonImpact64`]) in place of
-//! Hertz's: the kernel's envelope already follows the yield, and the ratios are what is left,
-//! the detector's Hertz area and energy constants read on the flatter yielding pulse (its
-//! duration about 12 % long) and any damping.
+//! it, Thornton's undamped closed forms ([`ThorntonImpact64`]) in place of Hertz's: the peak
+//! `F*` and the duration the area gives, `t_A = m u (1 + e) / (C_AREA F*)`. The kernel's
+//! envelope already follows both, so the ratios are what is left: the energy constant read on
+//! the flatter yielding pulse, and any damping.
 //!
 //! The pulse comes from the f64 integrator with the scene's law; `C_AREA` and `C_ENERGY` are the
 //! closed forms of the Hertz pulse (written here from their formulas, not taken from the
@@ -148,10 +148,6 @@ pub struct Calibration64 {
     /// contact's own pulse bends (0.02-0.2 for Hertz, about 0.56 for Adams with `d = 1e-5 m`
     /// at 100 kS/s).
     pub sharpest_bend: f64,
-    /// Geometric mean over the impacts of the duration from the area with the Hertz shape
-    /// over the pulse's own duration (1 for Hertz; about 1.12 for a yielding pulse, which is
-    /// flatter): the kernel's `Settings::area_ratio` for a scene that yields.
-    pub area_ratio: f64,
     /// Geometric mean over the impacts of the time the force stays within 2 % of its peak,
     /// as a fraction of the pulse's duration, over the same of the Hertz pulse
     /// ([`hertz_top_fraction`]): how much broader the contact's own top is (about 2-3 for a
@@ -337,9 +333,6 @@ struct Pulse64 {
     ratios: PulseRatios,
     /// Its force-time series `(t_s, force_n)`.
     series: Vec<(f64, f64)>,
-    /// The duration from the area with the Hertz shape over the pulse's own duration
-    /// (first contact to the force's first zero after its peak): `A / (C_AREA F_peak t_pulse)`.
-    area_ratio: f64,
     /// The time within 2 % of the peak over the pulse's duration.
     top_fraction: f64,
     /// The pulse's peak force in N.
@@ -356,7 +349,7 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
             yield_pressure_pa, ..
         } => {
             let t = ThorntonImpact64::new(&hertz, yield_pressure_pa)?;
-            (t.peak_force_n, t.duration_s)
+            (t.peak_force_n, t.area_duration_s)
         }
         _ => (hertz.peak_force_n, hertz.duration_s),
     };
@@ -383,7 +376,6 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
             shape: t_energy / t_area,
         },
         series,
-        area_ratio: t_area / report.pulse_duration_s,
         top_fraction,
         peak_n: peak,
         area_duration_s: t_area,
@@ -405,7 +397,6 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         sampled,
         pulses,
         shortest_s,
-        ln_area_ratio,
         ln_top,
     } = integrate_grid(scene)?;
     let fs = scene.sensor.sample_rate_hz;
@@ -446,7 +437,6 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         sampled_shape_spread: sampled,
         sampled: sampled_fit,
         phase,
-        area_ratio: (ln_area_ratio / n).exp(),
         flat_top_ratio: (ln_top / n).exp(),
     }))
 }
@@ -465,8 +455,7 @@ struct GridPulses {
     pulses: Vec<(f64, f64)>,
     /// The shortest Hertz contact time of the grid (s).
     shortest_s: f64,
-    /// Sums over the impacts of `ln area_ratio` and of `ln (top_fraction / Hertz's)`.
-    ln_area_ratio: f64,
+    /// Sum over the impacts of `ln (top_fraction / Hertz's)`.
     ln_top: f64,
 }
 
@@ -482,7 +471,6 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
         sampled: 0.0,
         pulses: Vec::new(),
         shortest_s: f64::INFINITY,
-        ln_area_ratio: 0.0,
         ln_top: 0.0,
     };
     let fs = scene.sensor.sample_rate_hz;
@@ -493,7 +481,6 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
                 let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
                 spec.law = scene.class_law(i)?;
                 let p = pulse_ratios_and_series(&spec)?;
-                g.ln_area_ratio += p.area_ratio.ln();
                 g.ln_top += (p.top_fraction / hertz_top_fraction()).ln();
                 g.shortest_s = g.shortest_s.min(spec.hertz()?.duration_s);
                 g.pulses.push((p.peak_n, p.area_duration_s));

@@ -172,8 +172,7 @@ pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
 /// contact calibration of a damped law or a yielding class (`None`: the Hertz law, no yield),
 /// `yields` whether a class yields, and `table_residual` the residual of the classes' ratio
 /// tables (`None`: no tables). Each ratio of the contact calibration is taken unless the file
-/// states one other than the kernel's default; a scene that yields also takes `area_ratio`,
-/// by which the duration ratio is then divided, and `flat_top_ratio`. A law whose ratios vary
+/// states one other than the kernel's default; a scene that yields also takes `flat_top_ratio`. A law whose ratios vary
 /// between impacts widens the tolerances to cover them: `shape_tolerance >= 1.5 x` the spread
 /// of `ln q` (between impacts, plus that of sampling at the scene's rate), `model_sigma >= `
 /// the larger spread of `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled
@@ -197,11 +196,8 @@ pub fn settings_to_kernel(
         Some(c) if file == default => c as f32,
         _ => file,
     };
-    // A scene that yields reads its flatter pulses' duration with their own area
-    // (`area_ratio`), and the classifier divides only by what remains of the ratio.
-    let area = cal.filter(|_| yields).map_or(1.0, |c| c.area_ratio);
-    s.area_ratio = area as f32;
-    // ... and allows its broader tops a longer run of equal samples before calling one clipped.
+    // A scene that yields allows its broader tops a longer run of equal samples before
+    // calling one clipped.
     if let Some(c) = cal.filter(|_| yields) {
         s.flat_top_ratio = c.flat_top_ratio.max(1.0) as f32;
     }
@@ -216,7 +212,7 @@ pub fn settings_to_kernel(
         duration_ratio: pick(
             o.duration_ratio,
             dc.duration_ratio,
-            cal.map(|c| unless_tables(c.ratios.duration / area)),
+            cal.map(|c| unless_tables(c.ratios.duration)),
         ),
         shape_ratio: pick(o.shape_ratio, dc.shape_ratio, cal.map(|c| c.ratios.shape)),
         skewness: pick(o.skewness, dc.skewness, cal.map(|c| c.skewness)),

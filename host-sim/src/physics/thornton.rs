@@ -25,7 +25,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::physics::hertz64::{HERTZ_TAU, HertzImpact64, non_negative, positive};
+use crate::physics::hertz64::{HERTZ_TAU, HERTZ_TC_FACTOR, HertzImpact64, non_negative, positive};
 use crate::physics::sim_error::SimError;
 
 /// The elastic unloading branch fixed at the turnaround of the penetration.
@@ -211,6 +211,10 @@ pub struct ThorntonImpact64 {
     pub unloading_time_s: f64,
     /// Contact duration (first contact to `delta = delta_p`) in s: the sum of the three phases.
     pub duration_s: f64,
+    /// The duration the area gives a Hertz-shaped pulse of the same peak,
+    /// `t_A = J / (C_AREA F*)` in s, with the impulse `J = m u (1 + e)` and
+    /// `C_AREA = 1.6 / 2.9432752` (the Hertz contact time `t_c` below yield).
+    pub area_duration_s: f64,
 }
 
 impl ThorntonImpact64 {
@@ -268,6 +272,7 @@ impl ThorntonImpact64 {
             plastic_time_s,
             unloading_time_s,
             duration_s: elastic_time_s + plastic_time_s + unloading_time_s,
+            area_duration_s: m * u * (1.0 + restitution) * HERTZ_TC_FACTOR / (1.6 * peak_force_n),
         })
     }
 }

@@ -265,7 +265,6 @@ fn changed_fields(s: &Settings) -> Vec<String> {
         contact: _,
         spike_fraction,
         skew_tolerance,
-        area_ratio,
         flat_top_ratio,
         sampled_phase: _,
     } = *s;
@@ -288,7 +287,6 @@ fn changed_fields(s: &Settings) -> Vec<String> {
     float("shape_tolerance", shape_tolerance, d.shape_tolerance);
     float("spike_fraction", spike_fraction, d.spike_fraction);
     float("skew_tolerance", skew_tolerance, d.skew_tolerance);
-    float("area_ratio", area_ratio, d.area_ratio);
     float("flat_top_ratio", flat_top_ratio, d.flat_top_ratio);
     let mut int = |name: &str, v: u16, default: u16| {
         if v != default {
@@ -645,7 +643,6 @@ mod tests {
             ("shape_tolerance", st.shape_tolerance, d.shape_tolerance),
             ("spike_fraction", st.spike_fraction, d.spike_fraction),
             ("skew_tolerance", st.skew_tolerance, d.skew_tolerance),
-            ("area_ratio", st.area_ratio, d.area_ratio),
             ("flat_top_ratio", st.flat_top_ratio, d.flat_top_ratio),
         ] {
             let written = format!("{field}: {},", lit(v));

@@ -36,9 +36,8 @@ pub fn scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, Error> {
     ];
     let sensor = SensorChain::from_plate(100000.0, 50.0, 30.0, 4.0, 16);
     let settings = Settings {
-        model_sigma: 0.018717095,
+        model_sigma: 1.3953827e-9,
         skew_tolerance: 0.15206832,
-        area_ratio: 1.1204046,
         flat_top_ratio: 1.198807,
         contact: ContactCalibration {
             force_ratio: 1.0,
