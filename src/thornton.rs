@@ -88,14 +88,14 @@ pub fn ratios_in<M: Backend>(speed_ratio: f32) -> Result<YieldRatios, Error> {
     let plastic = libm::atanf(M::sqrt(1.2 * (1.0 / s2 - 1.0))) / (s_fifth * 1.369_306_4);
     let unloading = q * (s / s_fifth) / (2.0 * restitution * M::sqrt(d));
     let duration = (elastic + plastic) / CONTACT_TIME_FACTOR + unloading;
+    let force = representable(force, "yield force ratio")?;
+    let restitution = representable(restitution, "restitution")?;
     Ok(YieldRatios {
-        force: representable(force, "yield force ratio")?,
+        force,
         duration: representable(duration, "yield duration ratio")?,
-        restitution: representable(restitution, "restitution")?,
-        area_duration: representable(
-            0.5 * (1.0 + restitution) / force,
-            "yield area duration ratio",
-        )?,
+        restitution,
+        // At most `1 / force`, so representable with `force`.
+        area_duration: 0.5 * (1.0 + restitution) / force,
     })
 }
 
