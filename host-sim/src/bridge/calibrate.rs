@@ -322,7 +322,8 @@ pub fn sharpest_bend(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
 
 /// The ratios of one impact, from its integrated force-time series (trapezoid sums on
 /// `POINTS_PER_PULSE` points per Hertz contact time), against the Hertz impact, or against
-/// Thornton's undamped impact for [`LawSpec::Thornton`].
+/// Thornton's undamped impact for [`LawSpec::Thornton`] (its peak `F*` and the duration its
+/// area gives, [`ThorntonImpact64::area_duration_s`]).
 pub fn pulse_ratios(spec: &ImpactSpec) -> Result<PulseRatios, SimError> {
     pulse_ratios_and_series(spec).map(|p| p.ratios)
 }
@@ -341,7 +342,8 @@ struct Pulse64 {
     area_duration_s: f64,
 }
 
-/// [`pulse_ratios`], the force-time series it was computed from and the pulse's area ratio.
+/// [`pulse_ratios`], the force-time series it was computed from and what the detector reads
+/// of it (peak, duration from the area, top fraction).
 fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
     let hertz = spec.hertz()?;
     let (reference_force_n, reference_duration_s) = match spec.law {
