@@ -85,10 +85,20 @@ pub const RING_SIGMAS: f32 = 4.0;
 
 /// The shape fit's own error of `ln F_max` at `n` samples per pulse, `FIT_FORCE n^-2.5`: the
 /// worst over the sample's phase of noiseless Hertz pulses from 3 to 400 samples per pulse.
+/// The detector's checks allow for it.
 pub const FIT_FORCE: f32 = 0.15;
 
 /// The shape fit's own error of `ln t_c`, `FIT_DURATION n^-2.5` (see [`FIT_FORCE`]).
 pub const FIT_DURATION: f32 = 0.65;
+
+/// The root mean square over the sample's phase of the shape fit's own error of `ln F_max`,
+/// `FIT_FORCE_RMS n^-2.5`, over the same pulses as [`FIT_FORCE`]: what a measurement states as
+/// the fit's standard deviation. The error goes with the phase (a uniform phase, no bias), so
+/// its worst is about twice its RMS.
+pub const FIT_FORCE_RMS: f32 = 0.075;
+
+/// The same of `ln t_c`, `FIT_DURATION_RMS n^-2.5` (see [`FIT_FORCE_RMS`]).
+pub const FIT_DURATION_RMS: f32 = 0.32;
 
 /// The flank fit's own error of `ln F_max` and `ln t_c` (standard deviation) beside the
 /// noise: its template, [`crate::shape_fit::peak_shape`], is within 1e-4 of the pulse's shape
@@ -1231,19 +1241,25 @@ impl<M: Backend> Detector<M> {
         worst.unwrap_or_else(|| of(n, 1.0))
     }
 
-    /// The sigmas of `ln F_max` and `ln t_c` a measurement states: the noise model's `s`, less
-    /// the fit's own error (`FIT_FORCE`, `FIT_DURATION` times `n^-2.5`, in quadrature) where the
-    /// scene's sampling correction states that error in its place, so that it is not counted
-    /// twice. The detector's own checks keep it.
+    /// The sigmas of `ln F_max` and `ln t_c` a measurement states: the noise model's `s` with
+    /// the fit's own error as its root mean square over the phase (`FIT_FORCE_RMS`,
+    /// `FIT_DURATION_RMS` times `n^-2.5`) in place of its worst (`FIT_FORCE`, `FIT_DURATION`),
+    /// which the detector's own checks keep: `s^2 - worst^2 (1 - (rms / worst)^2)`. Where the
+    /// scene's sampling correction states that error in its place, the whole of it is taken
+    /// out, so that it is not counted twice.
     #[inline(always)]
     fn stated_sigmas(&self, s: &Sigmas) -> (f32, f32) {
-        if !self.sampling_calibrated {
-            return (s.ln_force, s.ln_duration);
-        }
-        let less = |a: f32, b: f32| M::sqrt((a * a - b * b).max(0.0));
+        let (keep_force, keep_duration) = if self.sampling_calibrated {
+            (0.0, 0.0)
+        } else {
+            (FIT_FORCE_RMS / FIT_FORCE, FIT_DURATION_RMS / FIT_DURATION)
+        };
+        let less = |a: f32, worst: f32, keep: f32| {
+            M::sqrt((a * a - worst * worst * (1.0 - keep * keep)).max(0.0))
+        };
         (
-            less(s.ln_force, s.fit_force),
-            less(s.ln_duration, s.fit_duration),
+            less(s.ln_force, s.fit_force, keep_force),
+            less(s.ln_duration, s.fit_duration, keep_duration),
         )
     }
 
