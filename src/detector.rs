@@ -463,7 +463,7 @@ impl<M: Backend> Detector<M> {
             #[cfg(feature = "plasticity")]
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
-            hertz: s.contact == ContactCalibration::HERTZ && plain_area(s),
+            hertz: s.contact == ContactCalibration::HERTZ && plain_top(s),
             sampling_calibrated: s.corrects_sampling(),
             hold,
             max_samples,
@@ -1328,15 +1328,15 @@ impl<M: Backend> Detector<M> {
     }
 }
 
-/// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).
+/// No yield: the pulse's top is the Hertz pulse's (always, without the feature `plasticity`).
 #[cfg(feature = "plasticity")]
-fn plain_area(s: &crate::scene::Settings) -> bool {
+fn plain_top(s: &crate::scene::Settings) -> bool {
     s.flat_top_ratio == 1.0
 }
 
-/// No yield: the pulse's area is the Hertz pulse's (always, without the feature `plasticity`).
+/// No yield: the pulse's top is the Hertz pulse's (always, without the feature `plasticity`).
 #[cfg(not(feature = "plasticity"))]
-fn plain_area(_: &crate::scene::Settings) -> bool {
+fn plain_top(_: &crate::scene::Settings) -> bool {
     true
 }
 

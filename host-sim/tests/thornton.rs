@@ -267,7 +267,7 @@ fn kernel_ratios_match_the_integrator() {
                 .windows(2)
                 .map(|w| 0.5 * (w[1].0 - w[0].0) * (w[0].1 + w[1].1))
                 .sum();
-            let c_area = 1.6 / host_sim::hertz64::HERTZ_TC_FACTOR;
+            let c_area = host_sim::hertz64::C_AREA;
             let t_area = area / (c_area * s.peak_force_n) / h.duration_s;
             worst_area = worst_area.max(rel(f64::from(k.area_duration), t_area));
             assert!(

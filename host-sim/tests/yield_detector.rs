@@ -76,7 +76,7 @@ fn yielding_pulses_far_from_full_scale_are_measured_with_the_duration_their_area
     let file = yield_scene();
     let scene = scene_to_kernel(&file).unwrap();
     let model_sigma = scene.settings().model_sigma as f64;
-    let c_area = 1.6 / host_sim::hertz64::HERTZ_TC_FACTOR;
+    let c_area = host_sim::hertz64::C_AREA;
     let (mut errors, mut lengths) = (Vec::new(), Vec::new());
     let mut seed = 0;
     for class in 0..2 {

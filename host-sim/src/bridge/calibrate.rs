@@ -32,8 +32,7 @@ use crate::physics::law_spec::LawSpec;
 use crate::physics::thornton::ThorntonImpact64;
 use crate::scene::SceneFile;
 
-/// Area of the Hertz pulse over `F_max t_c`: `1.6 / 2.9432752` (the impulse `2 m u`).
-pub const C_AREA: f64 = 1.6 / CONTACT_TIME_FACTOR;
+pub use crate::physics::hertz64::C_AREA;
 
 /// Energy `integral F^2 dt` of the Hertz pulse over `F_max^2 t_c`:
 /// `2 B(8/5, 1/2) / (2.5 * 2.9432752)`, `B(8/5, 1/2) = Gamma(8/5) sqrt(pi) / Gamma(21/10)`.

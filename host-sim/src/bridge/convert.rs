@@ -172,14 +172,14 @@ pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
 /// contact calibration of a damped law or a yielding class (`None`: the Hertz law, no yield),
 /// `yields` whether a class yields, and `table_residual` the residual of the classes' ratio
 /// tables (`None`: no tables). Each ratio of the contact calibration is taken unless the file
-/// states one other than the kernel's default; a scene that yields also takes `flat_top_ratio`. A law whose ratios vary
-/// between impacts widens the tolerances to cover them: `shape_tolerance >= 1.5 x` the spread
-/// of `ln q` (between impacts, plus that of sampling at the scene's rate), `model_sigma >= `
-/// the larger spread of `ln F` and `ln t`, `spike_fraction >= 1.25 x` the sharpest sampled
-/// bend, `skew_tolerance >= 1.5 x` the spread of the skewness, or what of it the detector's
-/// trigger cut leaves outside its allowance if that is more (unless the file states them
-/// other than the default: a file value equal to the kernel's default is not told from a
-/// missing one). A scene whose classes carry ratio tables leaves the force and duration ratios
+/// states one other than the kernel's default; a scene that yields also takes
+/// `flat_top_ratio`. A law whose ratios vary between impacts widens the tolerances to cover
+/// them: `shape_tolerance >= 1.5 x` the spread of `ln q` (between impacts, plus that of
+/// sampling at the scene's rate), `model_sigma >= ` the larger spread of `ln F` and `ln t`,
+/// `spike_fraction >= 1.25 x` the sharpest sampled bend, `skew_tolerance >= 1.5 x` the spread
+/// of the skewness, or what of it the detector's trigger cut leaves outside its allowance if
+/// that is more (unless the file states them other than the default: a file value equal to
+/// the kernel's default is not told from a missing one). A scene whose classes carry ratio tables leaves the force and duration ratios
 /// to them (1 here), and its `model_sigma` is at least what the tables leave against direct
 /// integration (`table_residual`). Every value is rounded to `f32` here.
 pub fn settings_to_kernel(

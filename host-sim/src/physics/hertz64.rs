@@ -26,6 +26,10 @@ pub const HERTZ_TAU: f64 = 1.471_637_592_162_352_4;
 /// contact duration of the undamped Hertz impact in units of `delta_max / u`.
 pub const HERTZ_TC_FACTOR: f64 = 2.943_275_184_324_704_8;
 
+/// Area of the Hertz pulse over `F_max t_c`: `1.6 / 2.9432752` (the impulse `2 m u`,
+/// dimensionless).
+pub const C_AREA: f64 = 1.6 / HERTZ_TC_FACTOR;
+
 /// Standard gravity `g_n = 9.80665` m/s^2 (CGPM 1901), used when gravity is switched on.
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.806_65;
 

@@ -213,7 +213,8 @@ pub struct ThorntonImpact64 {
     pub duration_s: f64,
     /// The duration the area gives a Hertz-shaped pulse of the same peak,
     /// `t_A = J / (C_AREA F*)` in s, with the impulse `J = m u (1 + e)` and
-    /// `C_AREA = 1.6 / 2.9432752` (the Hertz contact time `t_c` below yield).
+    /// `C_AREA = 1.6 / 2.9432752` ([`crate::physics::hertz64::C_AREA`], written out so that
+    /// the calibration's ratios round as they did; the Hertz contact time `t_c` below yield).
     pub area_duration_s: f64,
 }
 
