@@ -25,6 +25,12 @@ pub struct Counters<const N: usize> {
     pub gaps: u32,
     /// Samples reported lost in those gaps.
     pub lost_samples: u64,
+    /// Times the equaliser's state was re-estimated after a sample at full scale or a gap
+    /// ([`crate::settle`]; always 0 behind a rigid chain).
+    pub settled: u32,
+    /// Samples spent on those re-estimations (their windows, believed or not), which the
+    /// detector did not search for pulses.
+    pub settle_samples: u64,
     /// Runs of identical samples on a noisy sensor (stuck sensor), as of the last event, gap
     /// or finish (counted by the detector even when a stuck event coincides with a pulse).
     pub stuck_runs: u32,
@@ -41,6 +47,8 @@ impl<const N: usize> Default for Counters<N> {
             rejected: [0; RejectReason::ALL.len()],
             gaps: 0,
             lost_samples: 0,
+            settled: 0,
+            settle_samples: 0,
             stuck_runs: 0,
         }
     }

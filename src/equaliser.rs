@@ -62,6 +62,10 @@ use crate::sampled::SampledCalibration;
 /// Most beam modes a chain can carry.
 pub const MAX_MODES: usize = 4;
 
+/// The states `(p, q)` of every second-order section (see [`EqualiserDesign`]), one pair per
+/// beam mode.
+pub type SectionStates = [[f32; 2]; MAX_MODES];
+
 /// Length of the impulse response summed at build for the noise gain (samples).
 const NOISE_TAPS: usize = 2048;
 
@@ -410,6 +414,25 @@ impl EqualiserDesign {
         self.taps.map_or(0, |t| t.delay as u32)
     }
 
+    /// Second-order sections in use (one per beam mode).
+    #[cfg(feature = "settle")]
+    pub(crate) fn section_count(&self) -> usize {
+        self.section_count as usize
+    }
+
+    /// One sample of the sections' free response: their output (before the base is added
+    /// back) for zero input, from the states `st`, which advance by the sample.
+    #[cfg(feature = "settle")]
+    #[inline(never)]
+    pub(crate) fn free_step(&self, st: &mut SectionStates) -> f32 {
+        let mut v = 0.0;
+        let count = self.section_count();
+        for (sec, s) in self.sections.iter().zip(st.iter_mut()).take(count) {
+            v = sec.step(s, v);
+        }
+        v
+    }
+
     /// The frequency response at `theta = w T` (rad per sample), with the reported delay taken
     /// off: `prod_j (w^2 + f1_j w + f0_j) / (w^2 + e1_j w + e0_j)` (`w = e^(i theta) - 1`)
     /// times `sum_k c_k e^(-i k theta) e^(i delay theta)` with an accelerometer stage, else
@@ -740,7 +763,7 @@ fn matched_section<M: Backend>(m: &BeamMode, zero: C, t: f32) -> (Section, f32) 
 pub struct Equaliser {
     design: EqualiserDesign,
     /// States `(p, q)` of each section.
-    state: [[f32; 2]; MAX_MODES],
+    state: SectionStates,
     /// The accelerometer FIR's last four inputs, newest first (relative to `offset`).
     history: [f32; 4],
     /// The first sample seen: every input is taken relative to it (and it is added back to
@@ -768,6 +791,16 @@ impl Equaliser {
     /// Forgets the past (after a gap in the stream): the next sample is the new reference.
     pub fn reset(&mut self) {
         *self = Self::new(&self.design);
+    }
+
+    /// Takes `error` off the sections' states: the correction of an observer that estimated
+    /// how far they are from the chain's ([`crate::settle`]).
+    #[cfg(feature = "settle")]
+    pub(crate) fn correct_states(&mut self, error: &SectionStates) {
+        for (st, e) in self.state.iter_mut().zip(error) {
+            st[0] -= e[0];
+            st[1] -= e[1];
+        }
     }
 
     /// Equalises `raw` into `out` (the shorter length of the two), sample by sample in order.

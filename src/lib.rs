@@ -30,6 +30,7 @@ pub mod sampled_phase;
 pub mod scene;
 #[cfg(feature = "serde")]
 pub mod settings_serde;
+pub mod settle;
 pub mod shape_fit;
 pub mod thornton;
 

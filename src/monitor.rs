@@ -9,6 +9,10 @@ use crate::error::Error;
 use crate::flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 use crate::math::{Backend, DefaultBackend};
 use crate::scene::{DEFAULT_CLASSES, Scene};
+#[cfg(not(feature = "settle"))]
+use crate::settle::NoSettle as Settler;
+#[cfg(feature = "settle")]
+use crate::settle::Settler;
 
 /// One classified (or rejected) pulse.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,18 +64,22 @@ pub struct Monitor<
     counters: Counters<N>,
     flow: F,
     scene: Scene<N, M>,
+    /// The equaliser's state re-estimation after a clipped sample or a gap (cold: last).
+    settler: Settler,
 }
 
 impl<const N: usize, M: Backend> Monitor<N, M, NoFlow> {
     /// A monitor for a built scene.
     pub fn new(scene: Scene<N, M>) -> Self {
         let detector = Detector::new(&scene);
+        let settler = Settler::new(scene.sensor().sample_rate_hz);
         Self {
             equaliser: Equaliser::new(scene.equaliser()),
             scene,
             detector,
             counters: Counters::default(),
             flow: NoFlow,
+            settler,
         }
     }
 
@@ -94,6 +102,7 @@ impl<const N: usize, M: Backend> Monitor<N, M, NoFlow> {
             detector: self.detector,
             counters: self.counters,
             flow,
+            settler: self.settler,
         })
     }
 }
@@ -121,6 +130,10 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         let d = if self.equaliser.design().is_identity() {
             self.detector.feed(sample)?
         } else {
+            if self.settling(sample) && self.settle_slice(&[sample]) == 1 {
+                return None;
+            }
+            self.watch_full_scale(sample);
             let value = self.equaliser.step(sample);
             self.detector.feed_value(sample, value)?
         };
@@ -167,6 +180,19 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
     ) {
         let mut rest = samples;
         loop {
+            // Windows of the equaliser's re-estimation, one after another while they are
+            // discarded (as `feed` opens the next at the next sample), until one is believed,
+            // a sample at full scale ends them or the block does.
+            while let Some(&first) = rest.first() {
+                if !self.settling(first.into()) {
+                    break;
+                }
+                let used = self.settle_slice(rest);
+                if used == 0 {
+                    break;
+                }
+                rest = rest.get(used..).unwrap_or(&[]);
+            }
             let (quiet, stop) = if self.detector.is_idle() {
                 quiet_equalised(&mut self.equaliser, &mut self.detector, rest)
             } else {
@@ -176,6 +202,7 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
             let Some((&s, tail)) = rest.split_first() else {
                 return;
             };
+            self.watch_full_scale(s.into());
             let value = match stop {
                 Some((_, value)) => value,
                 None => self.equaliser.step(s.into()),
@@ -195,8 +222,12 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         self.counters.gaps = self.counters.gaps.saturating_add(1);
         self.counters.lost_samples = self.counters.lost_samples.saturating_add(lost as u64);
         let d = self.detector.gap(lost);
-        // What the chain rang during the gap is unknown: the equaliser starts afresh.
+        // What the chain rang during the gap is unknown: the equaliser starts afresh, and its
+        // state is re-estimated from the quiet samples that follow.
         self.equaliser.reset();
+        if !self.equaliser.design().is_identity() {
+            self.settler.arm();
+        }
         self.sync();
         Some(self.handle(d?))
     }
@@ -213,6 +244,58 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
     /// quiet path stays short).
     pub fn samples_fed(&self) -> u64 {
         self.detector.samples_fed()
+    }
+
+    /// `true` when `next` (a raw sample) and those after it go to the equaliser's state
+    /// re-estimation ([`crate::settle`]): a window is open, or one waits for an idle detector
+    /// and `next` is below full scale (a sample at full scale goes to the detector, and a
+    /// window open at it ends).
+    #[inline(always)]
+    fn settling(&mut self, next: i32) -> bool {
+        if self.settler.is_armed() && self.detector.is_idle() && !self.full_scale(next) {
+            self.settler.start(self.detector.baseline());
+        }
+        self.settler.in_window()
+    }
+
+    /// `true` for a raw sample at either end of the ADC's range.
+    #[inline(always)]
+    fn full_scale(&self, raw: i32) -> bool {
+        let sensor = self.scene.sensor();
+        raw >= sensor.adc_max || raw <= sensor.adc_min
+    }
+
+    /// A raw sample at full scale leaves the equaliser's sections off the chain's state: arm
+    /// their re-estimation. At the top of the range always (the quiet loop stops there); at
+    /// its bottom inside a pulse (the quiet loop does not stop there, and [`Monitor::feed`]
+    /// and [`Monitor::feed_slice`] must do the same).
+    #[inline(always)]
+    fn watch_full_scale(&mut self, raw: i32) {
+        let sensor = self.scene.sensor();
+        if raw >= sensor.adc_max || (raw <= sensor.adc_min && !self.detector.is_idle()) {
+            self.settler.arm();
+        }
+    }
+
+    /// Feeds the front of `samples` to the open window of the re-estimation
+    /// ([`Settler::run`]) and tells the detector and the counters what it took. Returns how
+    /// many samples it took.
+    #[cold]
+    #[inline(never)]
+    fn settle_slice<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> usize {
+        let sensor = self.scene.sensor();
+        let adc = (sensor.adc_min, sensor.adc_max);
+        let mut raw = samples.iter().map(|&s| s.into());
+        let noise = self.detector.noise();
+        let taken = self.settler.run(&mut self.equaliser, noise, adc, &mut raw);
+        self.detector
+            .skip_settled(taken.samples, taken.last_raw, taken.quiet_ms);
+        let c = &mut self.counters;
+        if taken.quiet_ms.is_some() {
+            c.settled = c.settled.saturating_add(1);
+        }
+        c.settle_samples = c.settle_samples.saturating_add(taken.samples as u64);
+        taken.samples as usize
     }
 
     /// Brings the counters the detector keeps (samples, stuck runs) into `counters`.

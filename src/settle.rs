@@ -1,0 +1,379 @@
+//! The equaliser's state re-estimated from the quiet samples after a clipped impact or a gap:
+//! a least-squares observer of the sections' free response.
+//!
+//! **Why.** The equaliser ([`crate::equaliser`]) inverts the samples it is given. While the
+//! ADC clips, those are not the chain's output; after a gap it restarts from rest while the
+//! beam still rings. Either way its sections are left off the chain's state, and that error
+//! rings on at the sections' poles (the chain's zeros, as lightly damped as the beam's modes)
+//! under every later pulse: after an impact that clips, thousands of counts for tens of
+//! milliseconds, which the detector waits out, deaf to the impacts beneath.
+//!
+//! **How.** The sections are linear. With their states off by `d` (two numbers per section)
+//! at the start of a quiet window, the equalised value is
+//! `v_n = b + sum_i d_i phi_i(n) + noise`, where `b` is the baseline the detector held before
+//! the event and `phi_i` the sections' output for zero input from the unit state `e_i`, which
+//! a shadow copy of the sections runs beside them ([`EqualiserDesign::free_step`]). Each
+//! sample adds one row to a least-squares problem, reduced at once by Givens rotations to
+//! `R d = z` (no sample is stored); after a window of [`WINDOW_S`] (at least
+//! [`MIN_WINDOW_SAMPLES`] rows), `d` carried to the
+//! window's end by the shadows' own states, `sum_i d_i A^W e_i`, is taken off the sections'
+//! ([`crate::Equaliser::correct_states`]). The first [`WARM_UP`] samples after the event are
+//! passed over: the accelerometer FIR's history still holds clipped samples (a FIR forgets in
+//! four). A direction whose column `R` cannot tell from the others (`|R_ii|` below
+//! [`RANK_TOLERANCE`] of its column's norm) is left uncorrected.
+//!
+//! **When it is believed.** The fit is taken only when the window's residual mean square is
+//! within [`ACCEPT_SIGMAS`]^2 of the equalised noise's variance: a pulse inside the window (or
+//! a chain given off, whose own ringing the sections do not annihilate) leaves more, and the
+//! window is discarded for a fresh one, at most [`MAX_WINDOWS`] per event; a sample at full
+//! scale ends the re-estimation at once and goes to the detector (the next impact that clips
+//! starts it again). Every sample spent here is counted (`Counters::settle_samples`), and the
+//! detector is told of them: it searches none of them for pulses.
+//!
+//! **Cost.** Behind a rigid chain nothing arms it. It is the cargo feature `settle` (on by
+//! default): about 3.5 KB of flash on a Cortex-M4F and 600 B of RAM in every
+//! [`crate::Monitor`]; without it a monitor carries [`NoSettle`], which takes no sample, and
+//! an equaliser left off the chain's state rings until its own damping ends it.
+
+use crate::equaliser::{Equaliser, MAX_MODES};
+#[cfg(feature = "settle")]
+use crate::equaliser::{EqualiserDesign, SectionStates};
+
+/// Length of one window of the fit (s, after [`WARM_UP`]): long enough for a section at
+/// 170 Hz to turn by a fifth of a period, short enough that an impact seldom falls into it.
+pub const WINDOW_S: f32 = 1e-3;
+
+/// Rows of a window at least, whatever the rate: three per unknown.
+pub const MIN_WINDOW_SAMPLES: u16 = 6 * MAX_MODES as u16;
+
+/// Samples passed over before a window: the accelerometer FIR's four of history.
+pub const WARM_UP: u16 = 4;
+
+/// Windows tried per event before the state is left as it is.
+pub const MAX_WINDOWS: u8 = 3;
+
+/// A window is believed when its residual RMS is within this many noise sigmas.
+pub const ACCEPT_SIGMAS: f32 = 2.0;
+
+/// `|R_ii|` below this share of column `i`'s norm: the direction is left uncorrected.
+pub const RANK_TOLERANCE: f32 = 1e-4;
+
+/// Unknowns at most: two states per section.
+#[cfg(feature = "settle")]
+const UNKNOWNS: usize = 2 * MAX_MODES;
+
+/// Where the re-estimation stands.
+#[cfg(feature = "settle")]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+enum Phase {
+    /// Nothing to do.
+    Off,
+    /// An event happened: a window starts once the detector is idle.
+    Armed,
+    /// Inside a window: samples taken so far (the warm-up included).
+    Window(u16),
+}
+
+/// What one sample of a window ended in.
+#[cfg(feature = "settle")]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Settled {
+    /// The window goes on.
+    Pending,
+    /// The fit is believed: take `error` off the sections' states; the quiet signal's mean
+    /// square about the baseline is then `quiet_ms` (counts^2).
+    Correct {
+        /// The sections' state error at the window's end.
+        error: SectionStates,
+        /// The residual mean square of the window (counts^2).
+        quiet_ms: f32,
+    },
+    /// The window was discarded; another starts (or, after [`MAX_WINDOWS`], none).
+    Discarded,
+}
+
+/// What [`Settler::run`] took from a stream, for the detector ([`crate::Detector`] is told
+/// of every sample) and the counters.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Taken {
+    /// Samples taken (equalised, not searched for pulses).
+    pub samples: u32,
+    /// The last of them (raw counts).
+    pub last_raw: Option<i32>,
+    /// With a believed fit: the residual mean square about the baseline (counts^2).
+    pub quiet_ms: Option<f32>,
+}
+
+/// The observer: its phase, the shadow sections and the triangular least-squares system.
+#[cfg(feature = "settle")]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Settler {
+    phase: Phase,
+    windows: u8,
+    /// Rows of a window: [`WINDOW_S`] at the sample rate, at least [`MIN_WINDOW_SAMPLES`].
+    window_samples: u16,
+    /// The detector's baseline when the window started (counts).
+    baseline: f32,
+    /// The sections from each unit state, running with zero input.
+    shadows: [SectionStates; UNKNOWNS],
+    /// Rows of `R`, the right-hand side `z` in the last column.
+    r: [[f32; UNKNOWNS + 1]; UNKNOWNS],
+    /// Squared norm of each column so far.
+    norm2: [f32; UNKNOWNS],
+    /// Residual sum of squares so far (counts^2).
+    rss: f32,
+}
+
+#[cfg(feature = "settle")]
+impl Settler {
+    /// An observer at rest for a stream sampled at `sample_rate_hz` (a window of
+    /// `max(WINDOW_S fs, MIN_WINDOW_SAMPLES)` rows, at most `u16::MAX`).
+    pub fn new(sample_rate_hz: f32) -> Self {
+        let rows = (WINDOW_S * sample_rate_hz).max(MIN_WINDOW_SAMPLES as f32);
+        Self {
+            window_samples: rows.min(u16::MAX as f32) as u16,
+            ..Self::resting()
+        }
+    }
+
+    fn resting() -> Self {
+        Self {
+            phase: Phase::Off,
+            windows: 0,
+            window_samples: MIN_WINDOW_SAMPLES,
+            baseline: 0.0,
+            shadows: [[[0.0; 2]; MAX_MODES]; UNKNOWNS],
+            r: [[0.0; UNKNOWNS + 1]; UNKNOWNS],
+            norm2: [0.0; UNKNOWNS],
+            rss: 0.0,
+        }
+    }
+
+    /// An event left the sections' states unknown (a sample at full scale, a gap): a window
+    /// starts once the detector is idle, and [`MAX_WINDOWS`] are allowed again.
+    pub fn arm(&mut self) {
+        self.phase = Phase::Armed;
+        self.windows = 0;
+    }
+
+    /// A sample at full scale inside a window: the window ends and the event re-arms
+    /// (windows already spent stay spent, so that a stream at full scale cannot loop).
+    pub fn interrupt(&mut self) {
+        if let Phase::Window(_) = self.phase {
+            self.phase = Phase::Armed;
+        }
+    }
+
+    /// `true` when a window waits for the detector to be idle.
+    pub fn is_armed(&self) -> bool {
+        self.phase == Phase::Armed
+    }
+
+    /// `true` inside a window: the next samples are the observer's.
+    pub fn in_window(&self) -> bool {
+        matches!(self.phase, Phase::Window(_))
+    }
+
+    /// Starts a window on the detector's `baseline` (counts), or gives up after
+    /// [`MAX_WINDOWS`].
+    pub fn start(&mut self, baseline: f32) {
+        if self.windows >= MAX_WINDOWS {
+            self.phase = Phase::Off;
+            return;
+        }
+        *self = Self {
+            phase: Phase::Window(0),
+            windows: self.windows + 1,
+            window_samples: self.window_samples,
+            baseline,
+            ..Self::resting()
+        };
+    }
+
+    /// Runs the open window over `raw` samples (counts): each through `equaliser` and into
+    /// [`Settler::take`] (`noise`: the equalised noise's RMS, counts), until the window
+    /// closes or a sample reaches `adc` `(min, max)` (that one is not taken: it ends the
+    /// window and is left for the detector). A believed fit is taken off `equaliser`'s
+    /// sections. Returns what the detector must be told.
+    #[inline(never)]
+    pub fn run(
+        &mut self,
+        equaliser: &mut Equaliser,
+        noise: f32,
+        (adc_min, adc_max): (i32, i32),
+        raw: &mut dyn Iterator<Item = i32>,
+    ) -> Taken {
+        let mut taken = Taken::default();
+        while self.in_window() {
+            let Some(sample) = raw.next() else { break };
+            if sample >= adc_max || sample <= adc_min {
+                self.interrupt();
+                break;
+            }
+            let value = equaliser.step(sample);
+            taken.samples += 1;
+            taken.last_raw = Some(sample);
+            match self.take(equaliser.design(), value, noise) {
+                Settled::Pending => {}
+                Settled::Correct { error, quiet_ms } => {
+                    equaliser.correct_states(&error);
+                    taken.quiet_ms = Some(quiet_ms);
+                }
+                Settled::Discarded => break,
+            }
+        }
+        taken
+    }
+
+    /// Takes one equalised `value` (counts) of the window for the equaliser `design`, the
+    /// equalised noise's RMS being `noise` (counts): the last of the window solves the fit.
+    #[inline(never)]
+    pub fn take(&mut self, design: &EqualiserDesign, value: f32, noise: f32) -> Settled {
+        let Phase::Window(n) = self.phase else {
+            return Settled::Pending;
+        };
+        let unknowns = 2 * design.section_count();
+        if n == WARM_UP {
+            for (i, shadow) in self.shadows.iter_mut().enumerate().take(unknowns) {
+                if let Some(s) = shadow.get_mut(i / 2).and_then(|st| st.get_mut(i % 2)) {
+                    *s = 1.0;
+                }
+            }
+        }
+        if n >= WARM_UP {
+            let mut row = [0.0; UNKNOWNS + 1];
+            for (x, shadow) in row.iter_mut().zip(&mut self.shadows).take(unknowns) {
+                *x = design.free_step(shadow);
+            }
+            if let Some(z) = row.last_mut() {
+                *z = value - self.baseline;
+            }
+            self.add_row(row, unknowns);
+        }
+        let n = n.saturating_add(1);
+        self.phase = Phase::Window(n);
+        if n < WARM_UP.saturating_add(self.window_samples) {
+            return Settled::Pending;
+        }
+        self.phase = Phase::Armed;
+        let quiet_ms = self.rss / self.window_samples as f32;
+        let limit = ACCEPT_SIGMAS * noise;
+        // NaN is not believed either.
+        let believed = quiet_ms <= limit * limit;
+        if !believed {
+            return Settled::Discarded;
+        }
+        self.phase = Phase::Off;
+        Settled::Correct {
+            error: self.state_error(unknowns),
+            quiet_ms,
+        }
+    }
+
+    /// One row `(phi_1 .. phi_p, y)` into `R` and `z` by Givens rotations; what is left of `y`
+    /// joins the residual sum of squares.
+    #[inline(never)]
+    fn add_row(&mut self, mut row: [f32; UNKNOWNS + 1], unknowns: usize) {
+        for (x, n2) in row.iter().zip(self.norm2.iter_mut()).take(unknowns) {
+            *n2 += x * x;
+        }
+        for (i, ri) in self.r.iter_mut().enumerate().take(unknowns) {
+            rotate(ri, &mut row, i);
+        }
+        // The columns past `unknowns` stay zero: the rotations left `z`'s residual there.
+        let e = row.last().copied().unwrap_or(0.0);
+        self.rss += e * e;
+    }
+
+    /// Back-substitution of `R d = z`, then `sum_i d_i` times shadow `i`'s state now.
+    #[inline(never)]
+    fn state_error(&self, unknowns: usize) -> SectionStates {
+        let mut d = [0.0_f32; UNKNOWNS];
+        for i in (0..unknowns).rev() {
+            let Some(ri) = self.r.get(i) else { continue };
+            let mut acc = ri.last().copied().unwrap_or(0.0);
+            for (rij, dj) in ri.iter().zip(&d).take(unknowns).skip(i + 1) {
+                acc -= rij * dj;
+            }
+            let diag = ri.get(i).copied().unwrap_or(0.0);
+            let norm = libm::sqrtf(self.norm2.get(i).copied().unwrap_or(0.0));
+            if let Some(di) = d.get_mut(i) {
+                *di = if diag.abs() > RANK_TOLERANCE * norm {
+                    acc / diag
+                } else {
+                    0.0
+                };
+            }
+        }
+        let mut error = [[0.0; 2]; MAX_MODES];
+        for (di, shadow) in d.iter().zip(&self.shadows).take(unknowns) {
+            for (e, s) in error.iter_mut().zip(shadow) {
+                e[0] += di * s[0];
+                e[1] += di * s[1];
+            }
+        }
+        error
+    }
+}
+
+/// The Givens rotation that zeroes `row[i]` against `ri[i]` (`c = a / h`, `s = b / h`,
+/// `h = sqrt(a^2 + b^2)`), applied to both from column `i` on; nothing when `h` is 0 or not
+/// finite. Out of line, one loop: a window's rows are few, the firmware's flash is not.
+#[cfg(feature = "settle")]
+#[inline(never)]
+fn rotate(ri: &mut [f32; UNKNOWNS + 1], row: &mut [f32; UNKNOWNS + 1], i: usize) {
+    let (Some(&a), Some(&b)) = (ri.get(i), row.get(i)) else {
+        return;
+    };
+    let h = libm::sqrtf(a * a + b * b);
+    if !(h > 0.0 && h.is_finite()) {
+        return;
+    }
+    let (c, s) = (a / h, b / h);
+    for (rj, xj) in ri.iter_mut().zip(row.iter_mut()).skip(i) {
+        let (p, q) = (*rj, *xj);
+        *rj = c * p + s * q;
+        *xj = c * q - s * p;
+    }
+}
+
+/// The monitor's slot without the feature `settle`: never armed, takes no sample, no RAM.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NoSettle;
+
+impl NoSettle {
+    /// Nothing to keep, whatever the rate.
+    pub fn new(_sample_rate_hz: f32) -> Self {
+        Self
+    }
+
+    /// Nothing is re-estimated.
+    pub fn arm(&mut self) {}
+
+    /// Never armed.
+    pub fn is_armed(&self) -> bool {
+        false
+    }
+
+    /// Never in a window.
+    pub fn in_window(&self) -> bool {
+        false
+    }
+
+    /// Opens no window.
+    pub fn start(&mut self, _baseline: f32) {}
+
+    /// Takes nothing.
+    pub fn run(
+        &mut self,
+        _equaliser: &mut Equaliser,
+        _noise: f32,
+        _adc: (i32, i32),
+        _raw: &mut dyn Iterator<Item = i32>,
+    ) -> Taken {
+        Taken::default()
+    }
+}
