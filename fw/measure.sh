@@ -148,7 +148,7 @@ sizes "$elf_fe" "front_end_" "$streams_fe" | tee -a "$out/measures.txt"
 section "reference node: STM32F405 + IIS3DWB (build only; no IIS3DWB in QEMU)"
 # Built with the size-optimised `board` profile (fw/Cargo.toml); its flash and static RAM are
 # budgeted (reference_node_*).
-fwcargo build --profile board --features board --bin reference_node
+fwcargo build --profile board --no-default-features --features board --bin reference_node
 sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_" 0 \
     | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
 
@@ -201,7 +201,7 @@ fi
 fwcargo build --release --target thumbv7em-none-eabihf --bin node --features coalshock/plasticity
 sizes "$elf" "plasticity_kernel_" "$streams_node" | grep '_flash_code_bytes ' \
     | tee -a "$out/measures.txt"
-fwcargo build --profile board --features board,coalshock/plasticity --bin reference_node
+fwcargo build --profile board --no-default-features --features board,coalshock/plasticity --bin reference_node
 sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_plasticity_" 0 \
     | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
 python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
@@ -218,7 +218,7 @@ for key, a, b in [
 PY
 # Leave the default images in place (cached: no rebuild).
 fwcargo build --release --target thumbv7em-none-eabihf --bin node
-fwcargo build --profile board --features board --bin reference_node
+fwcargo build --profile board --no-default-features --features board --bin reference_node
 
 section "other cores: the kernel alone"
 for t in thumbv6m-none-eabi thumbv8m.main-none-eabihf; do
