@@ -12,12 +12,12 @@
 //! at the start of a quiet window, the equalised value is
 //! `v_n = b + sum_i d_i phi_i(n) + noise`, where `b` is the baseline the detector held before
 //! the event and `phi_i` the sections' output for zero input from the unit state `e_i`, which
-//! a shadow copy of the sections runs beside them ([`EqualiserDesign::free_step`]). Each
+//! a shadow copy of the sections runs beside them (`EqualiserDesign::free_step`). Each
 //! sample adds one row to a least-squares problem, reduced at once by Givens rotations to
 //! `R d = z` (no sample is stored); after a window of [`WINDOW_S`] (at least
 //! [`MIN_WINDOW_SAMPLES`] rows), `d` carried to the
 //! window's end by the shadows' own states, `sum_i d_i A^W e_i`, is taken off the sections'
-//! ([`crate::Equaliser::correct_states`]). The first [`WARM_UP`] samples after the event are
+//! (`Equaliser::correct_states`). The first [`WARM_UP`] samples after the event are
 //! passed over: the accelerometer FIR's history still holds clipped samples (a FIR forgets in
 //! four). A direction whose column `R` cannot tell from the others (`|R_ii|` below
 //! [`RANK_TOLERANCE`] of its column's norm) is left uncorrected.
