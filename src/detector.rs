@@ -770,20 +770,17 @@ impl<M: Backend> Detector<M> {
     /// Tells the idle detector that the `n` samples after the last one it was fed went to the
     /// equaliser's re-estimation ([`crate::settle`]), not to it: the sample index advances by
     /// `n`, the last of them (`last_raw`) is the one the next is compared with for a stuck run,
-    /// and the pre-trigger samples start afresh. With `quiet_ms` (the re-estimated signal's
-    /// mean square about the baseline, counts^2) the quiet mean square behind a chain starts
-    /// from it: the ringing it tracked before is gone.
-    pub(crate) fn skip_settled(&mut self, n: u32, last_raw: Option<i32>, quiet_ms: Option<f32>) {
+    /// and the pre-trigger samples start afresh. The quiet mean square behind a chain is kept:
+    /// it decays from what it tracked before within a few of its time constants
+    /// ([`RING_TAU_S`]), and a chain given off leaves ringing that the re-estimation does not
+    /// remove (set to the window's residual, it let more of that ringing start spurious
+    /// pulses: `docs/chain.md`).
+    pub(crate) fn skip_settled(&mut self, n: u32, last_raw: Option<i32>) {
         self.next_index = self.next_index.wrapping_add(n as u64);
         self.pre_start = self.pre_next;
         if let Some(raw) = last_raw {
             self.previous = raw;
             self.same_run = 0;
-        }
-        if let Some(ms) = quiet_ms {
-            if self.ring_weight > 0.0 {
-                self.ring_sum = ms / self.ring_scale();
-            }
         }
     }
 

@@ -288,8 +288,7 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         let mut raw = samples.iter().map(|&s| s.into());
         let noise = self.detector.noise();
         let taken = self.settler.run(&mut self.equaliser, noise, adc, &mut raw);
-        self.detector
-            .skip_settled(taken.samples, taken.last_raw, taken.quiet_ms);
+        self.detector.skip_settled(taken.samples, taken.last_raw);
         let c = &mut self.counters;
         if taken.quiet_ms.is_some() {
             c.settled = c.settled.saturating_add(1);

@@ -22,6 +22,12 @@
 //! four). A direction whose column `R` cannot tell from the others (`|R_ii|` below
 //! [`RANK_TOLERANCE`] of its column's norm) is left uncorrected.
 //!
+//! **What it cannot do.** Behind a chain given off by a few per cent, the equaliser's own
+//! ringing near a mode (180 Hz) looks over one window like a free response at the nearest
+//! chain zero (171 Hz): the fit takes part of it for a state error, and its correction beats
+//! against it afterwards (`docs/chain.md`: no gain there, 0.4-0.5 pp of forced choice lost on
+//! a scene where a fifth of the impacts clip).
+//!
 //! **When it is believed.** The fit is taken only when the window's residual mean square is
 //! within [`ACCEPT_SIGMAS`]^2 of the equalised noise's variance: a pulse inside the window (or
 //! a chain given off, whose own ringing the sections do not annihilate) leaves more, and the
@@ -32,7 +38,7 @@
 //!
 //! **Cost.** Behind a rigid chain nothing arms it. It is the cargo feature `settle` (on by
 //! default): on a Cortex-M4F 2.4 KB of flash on a size-optimised node with one math backend
-//! (5.1 KB on the measuring node, which carries both) and 600 B of RAM in every
+//! (5.0 KB on the measuring node, which carries both) and 600 B of RAM in every
 //! [`crate::Monitor`]; without it a monitor carries [`NoSettle`], which takes no sample, and
 //! an equaliser left off the chain's state rings until its own damping ends it.
 
