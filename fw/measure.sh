@@ -163,7 +163,6 @@ m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
 print(f"reference_node_settle_flash_added_bytes "
       f"{int(m['reference_node_settle_flash_bytes']) - int(m['reference_node_flash_bytes'])}")
 PY
-fwcargo build --profile board --no-default-features --features board --bin reference_node
 
 section "plasticity: the yield feature (fw feature plasticity; kernel feature plasticity)"
 # Three more builds (the default ones above stay as they were and carry none of it):

@@ -85,7 +85,7 @@ enum Phase {
 /// What one sample of a window ended in.
 #[cfg(feature = "settle")]
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Settled {
+enum Settled {
     /// The window goes on.
     Pending,
     /// The fit is believed: take `error` off the sections' states; the quiet signal's mean
@@ -165,8 +165,9 @@ impl Settler {
         self.windows = 0;
     }
 
-    /// A sample at full scale inside a window: the window ends and the event re-arms
-    /// (windows already spent stay spent, so that a stream at full scale cannot loop).
+    /// A sample at full scale inside a window: the window ends and the event stays armed (the
+    /// monitor then hands that sample to the detector, which re-arms it with fresh windows;
+    /// every window consumes samples, so a stream at full scale cannot loop here).
     pub fn interrupt(&mut self) {
         if let Phase::Window(_) = self.phase {
             self.phase = Phase::Armed;
@@ -200,7 +201,7 @@ impl Settler {
     }
 
     /// Runs the open window over `raw` samples (counts): each through `equaliser` and into
-    /// [`Settler::take`] (`noise`: the equalised noise's RMS, counts), until the window
+    /// the window's fit (`noise`: the equalised noise's RMS, counts), until the window
     /// closes or a sample reaches `adc` `(min, max)` (that one is not taken: it ends the
     /// window and is left for the detector). A believed fit is taken off `equaliser`'s
     /// sections. Returns what the detector must be told.
@@ -237,7 +238,7 @@ impl Settler {
     /// Takes one equalised `value` (counts) of the window for the equaliser `design`, the
     /// equalised noise's RMS being `noise` (counts): the last of the window solves the fit.
     #[inline(never)]
-    pub fn take(&mut self, design: &EqualiserDesign, value: f32, noise: f32) -> Settled {
+    fn take(&mut self, design: &EqualiserDesign, value: f32, noise: f32) -> Settled {
         let Phase::Window(n) = self.phase else {
             return Settled::Pending;
         };
