@@ -17,7 +17,7 @@
 
 use coalshock::math::{DefaultBackend, Libm};
 use host_sim::evaluate::{EvalError, EvalOptions, Evaluation, evaluate};
-use host_sim::generate::generate_class;
+use host_sim::generate::{generate_class, generate_classes};
 use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::reference::ReferenceOptions;
 use host_sim::scene::{self, SceneFile};
@@ -368,4 +368,19 @@ fn class_streams_hold_one_class() {
     assert_eq!(s.truth.len(), 20);
     assert!(s.truth.iter().all(|t| t.class == 1));
     assert!(generate_class(&scene, 2, 5, 4, &StreamOptions::default()).is_err());
+}
+
+#[test]
+fn a_class_list_draws_as_one_class_does_and_keeps_its_order() {
+    let scene = SceneFile::paper();
+    let opts = StreamOptions::default();
+    let one = generate_class(&scene, 1, 12, 7, &opts).expect("stream");
+    let list = generate_classes(&scene, &[1; 12], 7, &opts).expect("stream");
+    assert_eq!(one.samples, list.samples);
+    assert_eq!(one.truth, list.truth);
+    let order = [0, 1, 1, 0, 1, 0, 0, 1];
+    let mixed = generate_classes(&scene, &order, 7, &opts).expect("stream");
+    let got: Vec<usize> = mixed.truth.iter().map(|t| t.class).collect();
+    assert_eq!(got, order);
+    assert!(generate_classes(&scene, &[0, 2], 7, &opts).is_err());
 }

@@ -7,11 +7,15 @@
 //! # What is drawn
 //!
 //! Exactly `n_per_class` impacts of every class: `R` log-uniform, `u` uniform (or the drop
-//! height uniform, `u = sqrt(2 g h)`), as the scene says. They are cut into streams of
-//! `impacts_per_stream` impacts of one class each ([`crate::sim::generate::generate_class`]: the
-//! scene's contact law through the integrator, the sensor chain, well-separated impacts with
-//! 2-10 ms of quiet between pulses, no injected faults), and stream `j` of class `c` has its
-//! own seed derived from `(seed, c, j)`. The streams are simulated and replayed on every core
+//! height uniform, `u = sqrt(2 g h)`), as the scene says. They are cut into streams of at most
+//! `impacts_per_stream` impacts ([`crate::sim::generate::generate_classes`]: the scene's
+//! contact law through the integrator, the sensor chain, well-separated impacts with 2-10 ms
+//! of quiet between pulses, no injected faults). Behind a rigid chain each stream holds one
+//! class, and stream `j` of class `c` has its own seed derived from `(seed, c, j)`. Behind a
+//! chain that rings, every pulse rides on the ringing the impacts before it left, which would
+//! tell its class if they were all of its class: there the impacts of all classes are
+//! shuffled before they are cut, so that an impact's neighbours are drawn independently of its
+//! class (stream `j` seeded from `(seed, k, j)`, `k` the number of classes). The streams are simulated and replayed on every core
 //! and folded in their fixed order ([`crate::sim::par`]): one seed gives one result on every
 //! machine, whatever the number of threads. Each stream is replayed through a fresh `Monitor`
 //! ([`crate::score::replay::replay_events`]) and its reports are paired with the impacts
@@ -86,6 +90,7 @@ use std::time::Instant;
 use coalshock::math::Backend;
 use coalshock::scene::{DEFAULT_CLASSES, MAX_CLASSES};
 use coalshock::{Event, Monitor, Report, Scene, Verdict};
+use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -101,7 +106,7 @@ use crate::score::reference::{ReferenceLimit, ReferenceOptions, reference_limit}
 use crate::score::reliability::{Reliability, reliability};
 use crate::score::replay::{match_truth, replay_events};
 use crate::score::study_error::StudyError;
-use crate::sim::generate::generate_class;
+use crate::sim::generate::generate_classes;
 use crate::sim::par::map_ordered;
 use crate::sim::stream::{StreamOptions, Truth};
 
@@ -623,19 +628,11 @@ fn replay_streams<const N: usize, M: Backend + Send + Sync>(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Replayed, EvalError> {
     let total = opts.n_per_class * scene.classes.len();
-    let mut jobs: Vec<StreamJob> = Vec::new();
-    for class in 0..scene.classes.len() {
-        let (mut left, mut chunk) = (opts.n_per_class, 0);
-        while left > 0 {
-            let n = left.min(opts.impacts_per_stream);
-            jobs.push(StreamJob { class, chunk, n });
-            left -= n;
-            chunk += 1;
-        }
-    }
+    let rigid = scene.sensor.beam_modes.is_empty() && scene.sensor.accelerometer.is_none();
+    let jobs = stream_jobs(scene.classes.len(), opts, rigid);
     let run_job = |_: usize, job: &StreamJob| -> Result<ChunkResult, EvalError> {
         if opts.chain_drawn {
-            let seed = stream_seed(opts.seed ^ CHAIN_DRAW_SEED, job.class, job.chunk);
+            let seed = stream_seed(opts.seed ^ CHAIN_DRAW_SEED, job.tag, job.chunk);
             let drawn = kernel
                 .parts
                 .scene_in::<N, M>(&drawn_chain(scene, seed).sensor)?;
@@ -920,13 +917,60 @@ fn assemble<M: Backend>(
     }
 }
 
-/// One stream of one class: its seed's impacts, simulated and replayed.
+/// One stream: the class of each of its impacts, simulated and replayed.
+#[derive(Debug, PartialEq)]
 struct StreamJob {
-    class: usize,
-    /// Index of the stream within its class.
+    /// The stream's class, or the number of classes for a stream that mixes them.
+    tag: usize,
+    /// Index of the stream within its tag.
     chunk: usize,
-    /// Impacts in the stream.
-    n: usize,
+    /// The class of each impact, in stream order.
+    classes: Vec<usize>,
+}
+
+/// Mixed into the seed of the shuffle that interleaves the classes (`stream_jobs`).
+const INTERLEAVE_SEED: u64 = 0x1E7E_A5ED;
+
+/// The streams of an evaluation: `n_per_class` impacts of each of `k` classes in streams of
+/// at most `impacts_per_stream`. Behind a rigid chain a pulse carries nothing of the impacts
+/// before it, and each stream holds one class (tag `c`). Behind a chain that rings, every
+/// impact rides on the ringing the ones before it left, which would tell its class if they
+/// were of its class too; there the `k n_per_class` impacts are shuffled (seeded by `seed`),
+/// so that an impact's neighbours are drawn independently of its class, and cut into streams
+/// (tag `k`).
+fn stream_jobs(k: usize, opts: &EvalOptions, rigid_chain: bool) -> Vec<StreamJob> {
+    let per = opts.impacts_per_stream.max(1);
+    if rigid_chain {
+        let mut jobs = Vec::new();
+        for class in 0..k {
+            let (mut left, mut chunk) = (opts.n_per_class, 0);
+            while left > 0 {
+                let n = left.min(per);
+                jobs.push(StreamJob {
+                    tag: class,
+                    chunk,
+                    classes: vec![class; n],
+                });
+                left -= n;
+                chunk += 1;
+            }
+        }
+        return jobs;
+    }
+    let mut all: Vec<usize> = (0..k)
+        .flat_map(|c| std::iter::repeat_n(c, opts.n_per_class))
+        .collect();
+    all.shuffle(&mut ChaCha8Rng::seed_from_u64(mix(
+        opts.seed ^ INTERLEAVE_SEED
+    )));
+    all.chunks(per)
+        .enumerate()
+        .map(|(chunk, classes)| StreamJob {
+            tag: k,
+            chunk,
+            classes: classes.to_vec(),
+        })
+        .collect()
 }
 
 /// What one stream contributes to the evaluation.
@@ -941,7 +985,7 @@ struct ChunkResult {
     kernel_seconds: f64,
 }
 
-/// Simulates stream `job` (seed from `(opts.seed, class, chunk)`), replays it through a fresh
+/// Simulates stream `job` (seed from `(opts.seed, tag, chunk)`), replays it through a fresh
 /// `Monitor` and scores every impact.
 fn run_stream<const N: usize, M: Backend + Send + Sync>(
     scene: &SceneFile,
@@ -951,12 +995,10 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
     tolerance: u64,
     job: &StreamJob,
 ) -> Result<ChunkResult, EvalError> {
-    let class = job.class;
-    let stream = generate_class(
+    let stream = generate_classes(
         scene,
-        class,
-        job.n,
-        stream_seed(opts.seed, class, job.chunk),
+        &job.classes,
+        stream_seed(opts.seed, job.tag, job.chunk),
         &opts.stream,
     )?;
     let mut monitor: Monitor<N, M> = Monitor::new(kernel_scene.clone());
@@ -975,14 +1017,14 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
     for p in &matching.pairs {
         report_of[p.truth] = Some(p.report);
     }
-    let mut outcomes = Vec::with_capacity(job.n);
+    let mut outcomes = Vec::with_capacity(job.classes.len());
     let mut rejected = Vec::new();
     for (t, rep) in stream.truth.iter().zip(report_of) {
         let report = rep.map(|i| &reports[i]);
-        outcomes.push(outcome_of(models, class, t, report, &mut rejected));
+        outcomes.push(outcome_of(models, t.class, t, report, &mut rejected));
     }
     Ok(ChunkResult {
-        impacts: job.n,
+        impacts: job.classes.len(),
         outcomes,
         rejected,
         samples_fed: monitor.samples_fed(),
@@ -1350,5 +1392,62 @@ impl Evaluation {
             100.0 * (1.0 - self.confidence_threshold),
             self.reliability.table()
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn opts(n_per_class: usize) -> EvalOptions {
+        EvalOptions {
+            n_per_class,
+            impacts_per_stream: 250,
+            ..EvalOptions::default()
+        }
+    }
+
+    /// Every class's `n_per_class` impacts, each once.
+    fn counts(jobs: &[StreamJob], k: usize) -> Vec<usize> {
+        let mut c = vec![0; k];
+        for class in jobs.iter().flat_map(|j| &j.classes) {
+            c[*class] += 1;
+        }
+        c
+    }
+
+    #[test]
+    fn a_rigid_chain_keeps_one_class_per_stream() {
+        let jobs = stream_jobs(2, &opts(600), true);
+        assert_eq!(counts(&jobs, 2), [600, 600]);
+        assert_eq!(jobs.len(), 6);
+        assert!(jobs.iter().all(|j| j.classes.iter().all(|&c| c == j.tag)));
+        assert!(jobs.iter().all(|j| j.classes.len() <= 250));
+    }
+
+    #[test]
+    fn behind_a_ringing_chain_an_impact_s_neighbour_is_independent_of_its_class() {
+        let (k, n) = (3, 4000);
+        let jobs = stream_jobs(k, &opts(n), false);
+        assert_eq!(counts(&jobs, k), [n; 3]);
+        assert!(jobs.iter().all(|j| j.tag == k && j.classes.len() <= 250));
+        // Of consecutive impacts in a stream, a share 1/k are of one class when the order is
+        // independent of the class (one class per stream: all of them). The count of such
+        // pairs is binomial; 5 standard errors.
+        let pairs: Vec<bool> = jobs
+            .iter()
+            .flat_map(|j| j.classes.windows(2).map(|w| w[0] == w[1]))
+            .collect();
+        let same = pairs.iter().filter(|&&b| b).count() as f64;
+        let m = pairs.len() as f64;
+        let p = 1.0 / k as f64;
+        assert!(
+            (same / m - p).abs() < 5.0 * (p * (1.0 - p) / m).sqrt(),
+            "{same} of {m}"
+        );
+        // One seed, one layout; another seed, another.
+        assert_eq!(jobs, stream_jobs(k, &opts(n), false));
+        let other = EvalOptions { seed: 2, ..opts(n) };
+        assert_ne!(jobs, stream_jobs(k, &other, false));
     }
 }

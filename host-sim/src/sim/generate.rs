@@ -78,14 +78,7 @@ pub fn generate_with_progress(
     options: &StreamOptions,
     progress: &mut dyn FnMut(usize),
 ) -> Result<Stream, StreamError> {
-    generate_inner(
-        scene,
-        Source::Drawn(None),
-        n_impacts,
-        seed,
-        options,
-        progress,
-    )
+    generate_inner(scene, Source::Drawn, n_impacts, seed, options, progress)
 }
 
 /// [`generate`] with every impact of class `class` (index in the scene's order) instead of a
@@ -98,7 +91,20 @@ pub fn generate_class(
     seed: u64,
     options: &StreamOptions,
 ) -> Result<Stream, StreamError> {
-    if class >= scene.classes.len() {
+    generate_classes(scene, &vec![class; n_impacts], seed, options)
+}
+
+/// [`generate`] with impact `i` of class `classes[i]` (indices in the scene's order) instead
+/// of a class drawn from the priors; radius, speed, timing, noise and faults are drawn exactly
+/// as [`generate`] draws them, so `[c; n]` gives [`generate_class`]'s stream. A class index out
+/// of range is an option error.
+pub fn generate_classes(
+    scene: &SceneFile,
+    classes: &[usize],
+    seed: u64,
+    options: &StreamOptions,
+) -> Result<Stream, StreamError> {
+    if let Some(&class) = classes.iter().find(|&&c| c >= scene.classes.len()) {
         return Err(opt_err(
             "class",
             format!(
@@ -109,8 +115,8 @@ pub fn generate_class(
     }
     generate_inner(
         scene,
-        Source::Drawn(Some(class)),
-        n_impacts,
+        Source::Classes(classes),
+        classes.len(),
         seed,
         options,
         &mut |_| {},
@@ -168,8 +174,10 @@ pub fn generate_planned(
 /// Where a stream's impacts come from.
 #[derive(Clone, Copy)]
 enum Source<'a> {
-    /// Drawn from the scene's priors, of one class when given.
-    Drawn(Option<usize>),
+    /// Drawn from the scene's priors.
+    Drawn,
+    /// Impact `i` of class `classes[i]`, its size and speed drawn.
+    Classes(&'a [usize]),
     /// Given impact by impact.
     Plan(&'a [PlannedImpact]),
 }
@@ -315,7 +323,8 @@ fn draw_impacts(
         let (r_pile, r_gap, r_offset): (f64, f64, f64) = (rng.random(), rng.random(), rng.random());
         let (planned, fixed_class) = match source {
             Source::Plan(plan) => (plan.get(i), None),
-            Source::Drawn(c) => (None, c),
+            Source::Drawn => (None, None),
+            Source::Classes(classes) => (None, classes.get(i).copied()),
         };
         let (class, radius_m, speed_m_s) = match planned {
             Some(p) => (p.class, p.radius_m, p.speed_m_s),
