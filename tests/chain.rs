@@ -382,85 +382,123 @@ fn a_chain_scene_corrects_its_equalisers_residual_and_a_rigid_one_does_not() {
 /// at the mode's frequency, against this Monte Carlo). Both failed before: the baseline took
 /// the ringing's crests whole and its troughs only down to the trigger, so that `ln t_c` read
 /// up to 0.1 low; and the spread was stated as 1.5 times the amplitude, uncorrelated.
+///
+/// Behind several modes the node does not know which ring, and states the spread of the one
+/// that moves `ln t_c` most: never less than the ringing leaves, up to 4 times more for
+/// 2.1 kHz ringing behind three modes (printed). Matching the modes' mix to the quiet
+/// signal's mean square of its first difference got each of these within 5 %, but in the
+/// chain scenes' streams, with every chain drawn within its tolerance, it stated less than
+/// the ringing there leaves: 2.7-3.7 % confident errors on `mems_chain` against 0.2 %.
 #[test]
 fn ringing_before_a_pulse_reads_unbiased_with_the_spread_it_states() {
+    let beam = [
+        mode(180.0, 0.02, 0.1),
+        mode(650.0, 0.01, 0.05),
+        mode(2100.0, 0.02, 0.1),
+    ];
+    for f_hz in [180.0, 650.0, 2100.0] {
+        ringing_case(&[mode(f_hz, 0.02, 0.1)], &[(f64::from(f_hz), 100.0)]);
+    }
+    for rings in [
+        &[(2100.0, 100.0)][..],
+        &[(650.0, 100.0)],
+        &[(180.0, 70.7), (2100.0, 70.7)],
+    ] {
+        ringing_case(&beam, rings);
+    }
+}
+
+/// [`ringing_before_a_pulse_reads_unbiased_with_the_spread_it_states`] behind `modes`, with
+/// sinusoids `(frequency Hz, amplitude counts)` ringing before and through the pulse.
+fn ringing_case(modes: &[BeamMode], rings: &[(f64, f64)]) {
     use coalshock::detector::Detection;
     use std::f64::consts::TAU;
     let paper = Scene::<4>::paper().unwrap();
-    for f_hz in [180.0, 650.0, 2100.0] {
-        let sensor = SensorChain::from_plate(FS, 50.0, 30.0, 4.0, 16)
-            .with_dynamics(dynamics(&[mode(f_hz, 0.02, 0.1)], None))
-            .unwrap();
-        let scene =
-            Scene::<4>::new(*paper.plate(), paper.classes(), sensor, *paper.settings()).unwrap();
-        let counts_per_n = 1.0 / scene.sensor().force_per_count_n as f64;
-        let (len, amp, ring) = (20.0, 3000.0, 100.0);
-        let theta = TAU * f_hz as f64 / FS as f64;
-        let mut rng = common::Rng::new(11);
-        let (mut ef, mut et) = (Vec::new(), Vec::new());
-        let mut stated = [0.0f64; 3];
-        let trials = 400;
-        for _ in 0..trials {
-            let mut det = coalshock::Detector::new(&scene);
-            let phase = TAU * rng.uniform();
-            let pulse = common::Pulse {
-                start: 4000.0 + rng.uniform(),
-                len,
-                amp,
-                class: 0,
+    let sensor = SensorChain::from_plate(FS, 50.0, 30.0, 4.0, 16)
+        .with_dynamics(dynamics(modes, None))
+        .unwrap();
+    let scene =
+        Scene::<4>::new(*paper.plate(), paper.classes(), sensor, *paper.settings()).unwrap();
+    let counts_per_n = 1.0 / scene.sensor().force_per_count_n as f64;
+    let (len, amp) = (20.0, 3000.0);
+    let label = format!("{} modes, ringing {rings:?}", modes.len());
+    let mut rng = common::Rng::new(11);
+    let (mut ef, mut et) = (Vec::new(), Vec::new());
+    let mut stated = [0.0f64; 3];
+    let trials = 400;
+    for _ in 0..trials {
+        let mut det = coalshock::Detector::new(&scene);
+        let phases: Vec<f64> = rings.iter().map(|_| TAU * rng.uniform()).collect();
+        let pulse = common::Pulse {
+            start: 4000.0 + rng.uniform(),
+            len,
+            amp,
+            class: 0,
+        };
+        let mut got = None;
+        // The detector primes its baseline on the first samples: quiet, then the ringing
+        // (whose pull on the baseline has decayed by two of its time constants, to 1 %).
+        for i in 0..4400 {
+            let ringing: f64 = if i < 64 {
+                0.0
+            } else {
+                rings
+                    .iter()
+                    .zip(&phases)
+                    .map(|(&(f, a), ph)| a * (TAU * f / FS as f64 * i as f64 + ph).sin())
+                    .sum()
             };
-            let mut got = None;
-            // The detector primes its baseline on the first samples: quiet, then the ringing
-            // (whose pull on the baseline has decayed by two of its time constants, to 1 %).
-            for i in 0..4400 {
-                let ringing = if i < 64 {
-                    0.0
-                } else {
-                    ring * (theta * i as f64 + phase).sin()
-                };
-                let v = ringing + pulse.at(i) + 4.0 * rng.normal();
-                if let Some(Detection::Pulse { outcome, .. }) = det.feed_value(v as i32, v as f32) {
-                    got = Some(outcome);
-                }
+            let v = ringing + pulse.at(i) + 4.0 * rng.normal();
+            if let Some(Detection::Pulse { outcome, .. }) = det.feed_value(v as i32, v as f32) {
+                got = Some(outcome);
             }
-            let m = got
-                .expect("one pulse")
-                .unwrap_or_else(|r| panic!("{f_hz} Hz: {r:?}"));
-            ef.push((m.peak_force_n as f64 * counts_per_n / amp).ln());
-            et.push((m.duration_s as f64 * FS as f64 / len).ln());
-            let (sf, st) = (m.sigma_ln_force as f64, m.sigma_ln_duration as f64);
-            stated[0] += sf * sf / trials as f64;
-            stated[1] += st * st / trials as f64;
-            stated[2] += m.cov_ln as f64 / trials as f64;
         }
-        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
-        let (vf, vt, c) = common::variances_and_covariance(&ef, &et);
-        println!(
-            "{f_hz} Hz: bias ln F {:+.4} ln t_c {:+.4}; spread F {:.4} / stated {:.4}, t_c {:.4} / {:.4}, cov {:+.2e} / {:+.2e}",
-            mean(&ef),
-            mean(&et),
-            vf.sqrt(),
-            stated[0].sqrt(),
-            vt.sqrt(),
-            stated[1].sqrt(),
-            c,
-            stated[2]
+        let m = got
+            .expect("one pulse")
+            .unwrap_or_else(|r| panic!("{label}: {r:?}"));
+        ef.push((m.peak_force_n as f64 * counts_per_n / amp).ln());
+        et.push((m.duration_s as f64 * FS as f64 / len).ln());
+        let (sf, st) = (m.sigma_ln_force as f64, m.sigma_ln_duration as f64);
+        stated[0] += sf * sf / trials as f64;
+        stated[1] += st * st / trials as f64;
+        stated[2] += m.cov_ln as f64 / trials as f64;
+    }
+    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+    let (vf, vt, c) = common::variances_and_covariance(&ef, &et);
+    println!(
+        "{label}: bias ln F {:+.4} ln t_c {:+.4}; spread F {:.4} / stated {:.4}, t_c {:.4} / {:.4}, cov {:+.2e} / {:+.2e}",
+        mean(&ef),
+        mean(&et),
+        vf.sqrt(),
+        stated[0].sqrt(),
+        vt.sqrt(),
+        stated[1].sqrt(),
+        c,
+        stated[2]
+    );
+    // Unbiased within four standard errors (and the fit's own error at 20 samples).
+    for (e, v) in [(mean(&ef), vf), (mean(&et), vt)] {
+        assert!(
+            e.abs() < 4.0 * (v / trials as f64).sqrt() + 1e-3,
+            "{label}: {e}"
         );
-        // Unbiased within four standard errors (and the fit's own error at 20 samples).
-        for (e, v) in [(mean(&ef), vf), (mean(&et), vt)] {
-            assert!(
-                e.abs() < 4.0 * (v / trials as f64).sqrt() + 1e-3,
-                "{f_hz} Hz: {e}"
-            );
-        }
-        // The stated spread within a quarter of the Monte Carlo's.
-        for (mc, st) in [(vf, stated[0]), (vt, stated[1])] {
-            let r = (st / mc).sqrt();
-            assert!((0.8..1.25).contains(&r), "{f_hz} Hz: stated / observed {r}");
-        }
+    }
+    // The stated spread within a quarter of the Monte Carlo's at a lone mode; behind several,
+    // not below it (the peak's spread is the ringing's amplitude whatever its frequency).
+    let alone = modes.len() == 1;
+    for (mc, st, of_peak) in [(vf, stated[0], true), (vt, stated[1], false)] {
+        let r = (st / mc).sqrt();
+        let top = if alone || of_peak {
+            1.25
+        } else {
+            f64::INFINITY
+        };
+        assert!((0.8..top).contains(&r), "{label}: stated / observed {r}");
+    }
+    if alone {
         assert!(
             (c - stated[2]).abs() < 0.25 * (vf * vt).sqrt(),
-            "{f_hz} Hz: cov {c} stated {}",
+            "{label}: cov {c} stated {}",
             stated[2]
         );
     }
