@@ -297,8 +297,20 @@ fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) {
     println!("wrote {} and {}", bin.display(), csv.display());
 }
 
-fn main() -> Result<()> {
+/// Runs the command; an error is the user's to read, its causes after it, without a stack
+/// backtrace whatever `RUST_BACKTRACE` says (exit code 1; clap's own refusals exit with 2).
+fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    match run(&cli) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("Error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: &Cli) -> Result<()> {
     match &cli.command {
         Command::Paper(args) => host_sim::paper::run(&args.config(), &args.out),
         Command::Impact(args) => host_sim::impact_cli::run(args),

@@ -83,6 +83,36 @@ fn counts_beyond_their_bound_are_refused_with_it() {
     );
 }
 
+#[test]
+fn a_refused_scene_names_the_field_without_a_backtrace() {
+    let dir = temp_dir("field-named");
+    let path = dir.join("scene.toml");
+    let text = paper_with("radius_m = [0.015, 0.04]", "radius_m = [0.015, 0.03, 0.04]");
+    std::fs::write(&path, text).expect("write scene");
+    let out = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args([
+            "evaluate",
+            "--scene",
+            path.to_str().expect("utf8"),
+            "--n",
+            "5",
+        ])
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("runs host-sim");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("radius_m must be exactly two numbers"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("Stack backtrace") && !err.contains("panicked"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The paper scene's text with `from` replaced by `to` once.
 fn paper_with(from: &str, to: &str) -> String {
     let text = SceneFile::paper().to_toml_string().expect("serialize");
