@@ -15,8 +15,8 @@
 //! chain that rings, every pulse rides on the ringing the impacts before it left, which would
 //! tell its class if they were all of its class: there the impacts of all classes are
 //! shuffled before they are cut, so that an impact's neighbours are drawn independently of its
-//! class (stream `j` seeded from `(seed, k, j)`, `k` the number of classes). The streams are simulated and replayed on every core
-//! and folded in their fixed order ([`crate::sim::par`]): one seed gives one result on every
+//! class (stream `j` seeded from `(seed, k, j)`, `k` the number of classes). The streams are
+//! simulated and replayed on every core and folded in their fixed order ([`crate::sim::par`]): one seed gives one result on every
 //! machine, whatever the number of threads. Each stream is replayed through a fresh `Monitor`
 //! ([`crate::score::replay::replay_events`]) and its reports are paired with the impacts
 //! ([`crate::score::replay::match_truth`], nearest peak first, at most one longest contact time
@@ -540,9 +540,10 @@ fn mix(mut x: u64) -> u64 {
     x ^ (x >> 31)
 }
 
-/// Seed of stream `chunk` of class `class`.
-fn stream_seed(seed: u64, class: usize, chunk: usize) -> u64 {
-    mix(seed ^ mix(((class as u64) << 40) ^ chunk as u64))
+/// Seed of stream `chunk` of tag `tag` (its class, or the number of classes for a stream that
+/// mixes them: `stream_jobs`).
+fn stream_seed(seed: u64, tag: usize, chunk: usize) -> u64 {
+    mix(seed ^ mix(((tag as u64) << 40) ^ chunk as u64))
 }
 
 /// Phase 1: the options' counts and the chain mismatch's relative errors are in range.
@@ -924,8 +925,8 @@ struct StreamJob {
     tag: usize,
     /// Index of the stream within its tag.
     chunk: usize,
-    /// The class of each impact, in stream order.
-    classes: Vec<usize>,
+    /// The class of each impact, in stream order (a byte each: at most `MAX_CLASSES`).
+    classes: Vec<u8>,
 }
 
 /// Mixed into the seed of the shuffle that interleaves the classes (`stream_jobs`).
@@ -940,16 +941,17 @@ const INTERLEAVE_SEED: u64 = 0x1E7E_A5ED;
 /// (tag `k`).
 fn stream_jobs(k: usize, opts: &EvalOptions, rigid_chain: bool) -> Vec<StreamJob> {
     let per = opts.impacts_per_stream.max(1);
+    let k = k.min(MAX_CLASSES);
     if rigid_chain {
         let mut jobs = Vec::new();
-        for class in 0..k {
+        for (class, byte) in (0..k).zip(0u8..) {
             let (mut left, mut chunk) = (opts.n_per_class, 0);
             while left > 0 {
                 let n = left.min(per);
                 jobs.push(StreamJob {
                     tag: class,
                     chunk,
-                    classes: vec![class; n],
+                    classes: vec![byte; n],
                 });
                 left -= n;
                 chunk += 1;
@@ -957,7 +959,8 @@ fn stream_jobs(k: usize, opts: &EvalOptions, rigid_chain: bool) -> Vec<StreamJob
         }
         return jobs;
     }
-    let mut all: Vec<usize> = (0..k)
+    let mut all: Vec<u8> = (0u8..)
+        .take(k)
         .flat_map(|c| std::iter::repeat_n(c, opts.n_per_class))
         .collect();
     all.shuffle(&mut ChaCha8Rng::seed_from_u64(mix(
@@ -995,9 +998,10 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
     tolerance: u64,
     job: &StreamJob,
 ) -> Result<ChunkResult, EvalError> {
+    let classes: Vec<usize> = job.classes.iter().map(|&c| usize::from(c)).collect();
     let stream = generate_classes(
         scene,
-        &job.classes,
+        &classes,
         stream_seed(opts.seed, job.tag, job.chunk),
         &opts.stream,
     )?;
@@ -1017,14 +1021,14 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
     for p in &matching.pairs {
         report_of[p.truth] = Some(p.report);
     }
-    let mut outcomes = Vec::with_capacity(job.classes.len());
+    let mut outcomes = Vec::with_capacity(classes.len());
     let mut rejected = Vec::new();
     for (t, rep) in stream.truth.iter().zip(report_of) {
         let report = rep.map(|i| &reports[i]);
         outcomes.push(outcome_of(models, t.class, t, report, &mut rejected));
     }
     Ok(ChunkResult {
-        impacts: job.classes.len(),
+        impacts: classes.len(),
         outcomes,
         rejected,
         samples_fed: monitor.samples_fed(),
@@ -1410,8 +1414,8 @@ mod tests {
     /// Every class's `n_per_class` impacts, each once.
     fn counts(jobs: &[StreamJob], k: usize) -> Vec<usize> {
         let mut c = vec![0; k];
-        for class in jobs.iter().flat_map(|j| &j.classes) {
-            c[*class] += 1;
+        for &class in jobs.iter().flat_map(|j| &j.classes) {
+            c[usize::from(class)] += 1;
         }
         c
     }
@@ -1421,7 +1425,10 @@ mod tests {
         let jobs = stream_jobs(2, &opts(600), true);
         assert_eq!(counts(&jobs, 2), [600, 600]);
         assert_eq!(jobs.len(), 6);
-        assert!(jobs.iter().all(|j| j.classes.iter().all(|&c| c == j.tag)));
+        assert!(
+            jobs.iter()
+                .all(|j| j.classes.iter().all(|&c| usize::from(c) == j.tag))
+        );
         assert!(jobs.iter().all(|j| j.classes.len() <= 250));
     }
 
