@@ -715,6 +715,12 @@ impl SensorSpec {
         }
     }
 
+    /// `true` when the chain is the pure scale: no accelerometer resonance and no beam mode
+    /// (nothing rings, nothing is integrated between samples).
+    pub fn is_rigid(&self) -> bool {
+        self.accelerometer.is_none() && self.beam_modes.is_empty()
+    }
+
     /// Lowest and highest ADC code, `(-2^(b-1), 2^(b-1) - 1)`.
     pub fn adc_range(&self) -> (i32, i32) {
         let bits = self.adc_bits.clamp(MIN_ADC_BITS, MAX_ADC_BITS);

@@ -629,8 +629,7 @@ fn replay_streams<const N: usize, M: Backend + Send + Sync>(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Replayed, EvalError> {
     let total = opts.n_per_class * scene.classes.len();
-    let rigid = scene.sensor.beam_modes.is_empty() && scene.sensor.accelerometer.is_none();
-    let jobs = stream_jobs(scene.classes.len(), opts, rigid);
+    let jobs = stream_jobs(scene.classes.len(), opts, scene.sensor.is_rigid());
     let run_job = |_: usize, job: &StreamJob| -> Result<ChunkResult, EvalError> {
         if opts.chain_drawn {
             let seed = stream_seed(opts.seed ^ CHAIN_DRAW_SEED, job.tag, job.chunk);

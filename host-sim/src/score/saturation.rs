@@ -326,7 +326,7 @@ struct ChainGain {
 
 impl ChainGain {
     fn new(spec: &SensorSpec, t_lo: f64, t_hi: f64) -> Result<Self, SceneError> {
-        if spec.accelerometer.is_none() && spec.beam_modes.is_empty() {
+        if spec.is_rigid() {
             return Ok(Self { table: Vec::new() });
         }
         let (l0, l1) = (t_lo.ln(), t_hi.ln().max(t_lo.ln() + 1e-9));

@@ -263,7 +263,7 @@ impl Sensor {
     pub fn new(spec: &SensorSpec) -> Result<Self, SceneError> {
         spec.validate()?;
         let (adc_min, adc_max) = spec.adc_range();
-        let linear = if spec.accelerometer.is_none() && spec.beam_modes.is_empty() {
+        let linear = if spec.is_rigid() {
             None
         } else {
             Some(build_linear(spec))
