@@ -240,6 +240,17 @@ impl ForceLaw {
         {
             return (0.0, 0.0);
         }
+        self.unclamped_force_gradient(delta_m, delta_dot_m_s)
+    }
+
+    /// The gradient `(dG/ddelta in N/m, dG/ddelta_dot in N s/m)` of the
+    /// [`ForceLaw::unclamped_force`] `G` at `delta_m` (m) and `delta_dot_m_s` (m/s), exact:
+    /// `(0, 0)` for `delta_m <= 0`, else the formulas of [`ForceLaw::force_gradient`] whatever
+    /// the sign of `G` (the smooth continuation of the force through the clamp's switch).
+    pub fn unclamped_force_gradient(&self, delta_m: f64, delta_dot_m_s: f64) -> (f64, f64) {
+        if delta_m <= 0.0 {
+            return (0.0, 0.0);
+        }
         let pow_slope = |k: f64, n: f64| {
             if n == 1.5 {
                 1.5 * k * delta_m.sqrt()
