@@ -1,8 +1,8 @@
 //! Impacts per second of the contact integrator on the paper scene (coal, R = 0.03 m, on
 //! carbon steel at 1 m/s): Dormand-Prince 5(4) at rtol = atol = 1e-3 ... 1e-12, Dop853,
-//! Rodas4 and Auto at 1e-6, 1e-9 and 1e-12, and RK4 at 20 / 50 / 200 steps per contact time,
-//! undamped Hertz and Adams IMPACT (c_max for e = 0.5, d = 0.01 mm); and the ode_solvers
-//! crate's Dop853 on the undamped contact at 1e-6, 1e-9 and 1e-12.
+//! Rodas4, Radau13 and Auto at 1e-6, 1e-9 and 1e-12, and RK4 at 20 / 50 / 200 steps per
+//! contact time, undamped Hertz and Adams IMPACT (c_max for e = 0.5, d = 0.01 mm); and the
+//! ode_solvers crate's Dop853 on the undamped contact at 1e-6, 1e-9 and 1e-12.
 //!
 //! Before timing, an accuracy table is printed (markdown): relative error of F_max and t_c
 //! against the closed forms (undamped) or against Dopri5 at rtol 1e-13 (Adams), and the work

@@ -132,9 +132,10 @@ pub struct ImpactArgs {
     pub depth: Option<f64>,
     /// Integration method: dopri5 (Dormand-Prince 5(4), the default), dop853 (Dormand-Prince
     /// 8(5,3), cheaper at tolerances of 1e-9 and below), rodas4 (Rosenbrock on the exact
-    /// Jacobian, for heavily damped, stiff contacts), auto (dop853, switching to rodas4 where
-    /// the contact is stiff) or rk4 (fixed steps). The adaptive methods but dopri5 hold the
-    /// rebound and creep speeds to relative accuracy.
+    /// Jacobian, for heavily damped, stiff contacts), radau13 (Radau IIA of order 13 on the
+    /// exact Jacobian, for stiff contacts at tight tolerances), auto (dop853, switching to
+    /// radau13 where the contact is stiff) or rk4 (fixed steps). The adaptive methods but
+    /// dopri5 hold the rebound and creep speeds to relative accuracy.
     #[arg(long, value_enum, default_value_t = MethodName::Dopri5)]
     pub method: MethodName,
     /// Relative and absolute tolerance of the adaptive methods (all but rk4), on the state scaled by

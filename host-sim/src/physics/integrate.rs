@@ -25,15 +25,22 @@
 //! * [`Method::Rodas4`]: the L-stable Rosenbrock method of order 4(3) of Hairer & Wanner,
 //!   *Solving ODEs II*, IV.7 (`RODAS`), on the exact 2 x 2 Jacobian of the scaled equation
 //!   ([`ForceLaw::force_gradient`]), with a 3rd-order continuous output.
-//! * [`Method::Auto`]: Dop853 where the contact is not stiff, Rodas4 where it is (the step
-//!   times the Jacobian's spectral radius).
+//! * [`Method::Radau13`]: the 7-stage Radau IIA collocation method of order 13 (Hairer &
+//!   Wanner, *Solving ODEs II*, IV.5 and IV.8, Hairer's `RADAU5` and `RADAU`), L-stable and
+//!   stiffly accurate, by simplified Newton on the full 14 x 14 stage system with the exact
+//!   Jacobian (at the step's start and its predicted end, interpolated linearly to the nodes),
+//!   RADAU5's error estimate and step control, and the collocation polynomial (degree 7) as
+//!   continuous output. Its stages see the smooth force of the current side of a damped law's
+//!   clamp (the unclamped force while it is on, none while it is off; see Events).
+//! * [`Method::Auto`]: Dop853 where the contact is not stiff, Radau13 where it is (the step
+//!   times the Jacobian's spectral radius). Rodas4 stays selectable on its own.
 //! * [`Method::Rk4`]: classical fixed-step Runge-Kutta 4 with `N` steps per Hertz contact
 //!   time, graded near the two ends of the contact (see [`Method::Rk4`]).
 //!
-//! Dopri5 scales a component's error by `atol + rtol max(|y_i|, |y_new_i|)`. Dop853, Rodas4
-//! and Auto use `rtol m + atol min(1, max(m, floor))` (`m = max(|y_i|, |y_new_i|)`, the floor
-//! the largest penetration so far for `x`, 0 for `v`): the speed keeps relative accuracy when
-//! it is small (a heavily damped contact creeps out at 1e-5 to 1e-4 u, where Dopri5's
+//! Dopri5 scales a component's error by `atol + rtol max(|y_i|, |y_new_i|)`. Dop853, Rodas4,
+//! Radau13 and Auto use `rtol m + atol min(1, max(m, floor))` (`m = max(|y_i|, |y_new_i|)`,
+//! the floor the largest penetration so far for `x`, 0 for `v`): the speed keeps relative
+//! accuracy when it is small (a heavily damped contact creeps out at 1e-5 to 1e-4 u, where Dopri5's
 //! absolute part puts `t_c` off by 1e-5 to 2e-4 at 1e-9), and the penetration is held
 //! relative to the contact's own size. Dopri5 keeps its norm so that its results, and the
 //! streams made with it, stay as they were.
@@ -41,7 +48,8 @@
 //! # Events
 //! Each accepted step is searched on its continuous output (a polynomial in the step
 //! fraction `theta` of the method's degree: Dopri5's 4th-order extension and RK4's cubic
-//! Hermite as quartics, Dop853's of degree 7, Rodas4's cubic) for every sign change of
+//! Hermite as quartics, Dop853's and Radau13's of degree 7, Rodas4's cubic) for every sign
+//! change of
 //! three switching functions: the contact end (`x`), for the Adams law the kink `delta = d`
 //! (`x - d / delta_max`) and for the damped laws the clamp at zero
 //! ([`ForceLaw::clamp_switch`], the unclamped force divided by a positive factor; the Adams law
@@ -57,6 +65,16 @@
 //! continuous output: the largest of the forces at the step starts (known from the stepping;
 //! for a clamped law also at the step middles), refined by Brent's method between its
 //! neighbours (about 10 evaluations of the output).
+//!
+//! Radau13 does not put the clamp's kink inside its Newton iteration: while every switch is
+//! located (at most [`MAX_CLAMP_RESTARTS`]) its stages take the unclamped force on the side
+//! where the force is on and no force where the clamp holds it off, so a switch shows as a
+//! sign change of the clamp's switching function on its output, the step is re-taken to it,
+//! and the integration restarts on the side the switching function's rate points to (with
+//! the force 0 there; a sign change the output shows but the rate contradicts, as in the
+//! creep where the unclamped force stays within rounding of zero, leaves the force on). A
+//! whole step's end also sets the side from the switching function's sign there. Beyond the
+//! located switches its stages take the clamped force.
 //!
 //! # Per-step cost
 //! The step controller's factor `err^(0.2 - 0.75 beta) / facold^beta` is one `exp` of
@@ -74,14 +92,17 @@
 //! The damped laws with large damping (for example Adams with `c_max` a percent of `k` in SI)
 //! make the equation stiff: `c/m` times the contact time reaches 1e4. An explicit method then
 //! needs step sizes set by stability, not accuracy; the work is reported, not hidden
-//! ([`WorkStats`]). Rodas4 is not held by stability, and [`Method::Auto`] uses it where the
-//! explicit step would be. The sphere then creeps out along the clamp (the unclamped force
+//! ([`WorkStats`]). Rodas4 and Radau13 are not held by stability, and [`Method::Auto`] uses
+//! Radau13 where the explicit step would be (at rtol 1e-9 on the contact with `c_max` 1 % of
+//! `k`, Radau13 needs about 1.05 k force and Jacobian evaluations, Rodas4 about 19 k: order 13
+//! against 4 on the creep's long steps). The sphere then creeps out along the clamp (the unclamped force
 //! within rounding of zero for hundreds of steps); there the new methods' clamp search is
 //! bounded per step (`control::CLAMP_SPLITS`).
 //!
 //! # Layout
 //! One concept per file: `rhs` (the scaled equation of motion and its Jacobian), `dopri5`,
-//! `dop853`, `rodas4` and `rk4` (the methods' tableaus and steps), `dense` (a step's
+//! `dop853`, `rodas4`, `radau` and `rk4` (the methods' tableaus and steps; Radau13's tableau
+//! in `radau_tableau`, its Newton matrix's LU in `lu`), `dense` (a step's
 //! continuous output), `control` (the step-size controller, the error scale and Auto's
 //! choice), `switching` (the event search of a step), `run` (the driver of one contact),
 //! `peak` (the post-processing: largest penetration, peak force, pulse end) and `solution`
@@ -97,7 +118,10 @@ mod dense;
 mod dop853;
 mod dopri5;
 mod error_scale;
+mod lu;
 mod peak;
+mod radau;
+mod radau_tableau;
 mod rhs;
 mod rk4;
 mod rodas4;
@@ -152,9 +176,14 @@ pub enum Method {
     /// ([`ForceLaw::force_gradient`]), with a 3rd-order continuous output: for stiff contacts
     /// (heavy damping, `c/m` times the contact time far above 1).
     Rodas4,
-    /// Dop853 where the contact is not stiff and Rodas4 where it is, chosen after every
-    /// accepted step from the spectral radius `rho` of the exact Jacobian: to Rodas4 when
-    /// `h rho > 4` (the explicit step is held by stability), back after 3 Rodas4 steps with
+    /// Radau13, the 7-stage Radau IIA collocation method of order 13 (L-stable, stiffly
+    /// accurate) by simplified Newton on the exact Jacobian, with the collocation polynomial
+    /// (degree 7) as continuous output: for stiff contacts at tight tolerances, where Rodas4's
+    /// order 4 needs many steps.
+    Radau13,
+    /// Dop853 where the contact is not stiff and Radau13 where it is, chosen after every
+    /// accepted step from the spectral radius `rho` of the exact Jacobian: to Radau13 when
+    /// `h rho > 4` (the explicit step is held by stability), back after 3 Radau13 steps with
     /// `h rho < 1`.
     Auto,
     /// Classical fixed-step RK4 with `steps_per_tc` steps per Hertz contact time `T`
@@ -251,9 +280,11 @@ pub struct WorkStats {
     pub clamp_restarts: usize,
     /// Stops and restarts where a history-dependent law's penetration turned (0 or 1).
     pub turns: usize,
-    /// Evaluations of the exact Jacobian (Rodas4: one per step; Auto: also one per accepted
-    /// step, for its choice). Each costs about one force evaluation.
+    /// Evaluations of the exact Jacobian (Rodas4: one per step; Radau13: one per step, two
+    /// after a restart, and one per located clamp switch for its side; Auto: also one per
+    /// accepted Dop853 step, for its choice). Each costs about one force evaluation.
     pub jacobian_evals: usize,
-    /// Accepted steps taken by Rodas4 (for [`Method::Auto`], the stiff part of the contact).
+    /// Accepted steps taken by Rodas4 or Radau13 (for [`Method::Auto`], the stiff part of the
+    /// contact).
     pub stiff_steps: usize,
 }

@@ -12,7 +12,7 @@ use crate::physics::laws::ForceLaw;
 /// Dormand-Prince tolerances (`rtol = atol`, on the scaled state) of the criterion bench.
 pub const BENCH_DOPRI5_TOLERANCES: [f64; 4] = [1e-3, 1e-6, 1e-9, 1e-12];
 
-/// Tolerances of Dop853, Rodas4 and Auto in the criterion bench and `host-sim speed`.
+/// Tolerances of Dop853, Rodas4, Radau13 and Auto in the criterion bench and `host-sim speed`.
 pub const BENCH_NEW_TOLERANCES: [f64; 3] = [1e-6, 1e-9, 1e-12];
 
 /// RK4 steps per Hertz contact time of the criterion bench.
@@ -45,6 +45,7 @@ impl MethodCase {
             Method::Dopri5 => "dopri5",
             Method::Dop853 => "dop853",
             Method::Rodas4 => "rodas4",
+            Method::Radau13 => "radau13",
             Method::Auto => "auto",
             Method::Rk4 { .. } => "rk4",
         };
@@ -79,11 +80,16 @@ pub fn ladder(dopri5_tolerances: &[f64], rk4_steps: &[u32]) -> Vec<MethodCase> {
         .collect()
 }
 
-/// The criterion bench's ladder: Dopri5 at [`BENCH_DOPRI5_TOLERANCES`], Dop853, Rodas4 and
-/// Auto at [`BENCH_NEW_TOLERANCES`], RK4 at [`BENCH_RK4_STEPS`].
+/// The criterion bench's ladder: Dopri5 at [`BENCH_DOPRI5_TOLERANCES`], Dop853, Rodas4,
+/// Radau13 and Auto at [`BENCH_NEW_TOLERANCES`], RK4 at [`BENCH_RK4_STEPS`].
 pub fn bench_ladder() -> Vec<MethodCase> {
     let mut cases = ladder(&BENCH_DOPRI5_TOLERANCES, &[]);
-    for method in [Method::Dop853, Method::Rodas4, Method::Auto] {
+    for method in [
+        Method::Dop853,
+        Method::Rodas4,
+        Method::Radau13,
+        Method::Auto,
+    ] {
         cases.extend(
             BENCH_NEW_TOLERANCES
                 .iter()
@@ -94,11 +100,17 @@ pub fn bench_ladder() -> Vec<MethodCase> {
     cases
 }
 
-/// The ladder of the heavily damped contact ([`PaperProblems::heavy`]): Dopri5, Rodas4 and
-/// Auto at rtol 1e-6 and 1e-9 (Dop853 is held by stability there, at 40-50 x Auto's work).
+/// The ladder of the heavily damped contact ([`PaperProblems::heavy`]): Dopri5, Rodas4,
+/// Radau13 and Auto at rtol 1e-6 and 1e-9 (Dop853 is held by stability there, at 40-50 x
+/// Auto's work).
 pub fn heavy_ladder() -> Vec<MethodCase> {
     let mut cases = Vec::new();
-    for method in [Method::Dopri5, Method::Rodas4, Method::Auto] {
+    for method in [
+        Method::Dopri5,
+        Method::Rodas4,
+        Method::Radau13,
+        Method::Auto,
+    ] {
         cases.extend([1e-6, 1e-9].map(|t| MethodCase::adaptive(method, t)));
     }
     cases

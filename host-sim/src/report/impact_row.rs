@@ -167,7 +167,10 @@ pub enum MethodName {
     /// Rodas4, a Rosenbrock method on the exact Jacobian, with tolerance `tol`: for heavily
     /// damped (stiff) contacts.
     Rodas4,
-    /// Dop853 where the contact is not stiff, Rodas4 where it is (chosen step by step from
+    /// Radau13, the 7-stage Radau IIA method of order 13 on the exact Jacobian, with
+    /// tolerance `tol`: for heavily damped (stiff) contacts at tight tolerances.
+    Radau13,
+    /// Dop853 where the contact is not stiff, Radau13 where it is (chosen step by step from
     /// the Jacobian), with tolerance `tol`.
     Auto,
     /// Fixed-step RK4 with `steps_per_tc` steps per Hertz contact time.
@@ -176,10 +179,11 @@ pub enum MethodName {
 
 impl MethodName {
     /// Every method, in the order the help lists them.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::Dopri5,
         Self::Dop853,
         Self::Rodas4,
+        Self::Radau13,
         Self::Auto,
         Self::Rk4,
     ];
@@ -190,6 +194,7 @@ impl MethodName {
             Self::Dopri5 => "dopri5",
             Self::Dop853 => "dop853",
             Self::Rodas4 => "rodas4",
+            Self::Radau13 => "radau13",
             Self::Auto => "auto",
             Self::Rk4 => "rk4",
         }
@@ -205,8 +210,11 @@ impl MethodName {
             Self::Rodas4 => {
                 "Rodas4, a Rosenbrock method on the exact Jacobian, with tolerance `tol`: for heavily damped (stiff) contacts"
             }
+            Self::Radau13 => {
+                "Radau IIA of order 13 on the exact Jacobian, with tolerance `tol`: for heavily damped (stiff) contacts at tight tolerances"
+            }
             Self::Auto => {
-                "Dop853 where the contact is not stiff, Rodas4 where it is (chosen step by step), with tolerance `tol`"
+                "Dop853 where the contact is not stiff, Radau13 where it is (chosen step by step), with tolerance `tol`"
             }
             Self::Rk4 => "Fixed-step RK4 with `steps_per_tc` steps per Hertz contact time",
         }
@@ -219,7 +227,9 @@ impl MethodName {
             .into_iter()
             .find(|m| m.as_str() == norm)
             .ok_or_else(|| {
-                format!("unknown method {s:?}: expected dopri5, dop853, rodas4, auto or rk4")
+                format!(
+                    "unknown method {s:?}: expected dopri5, dop853, rodas4, radau13, auto or rk4"
+                )
             })
     }
 }
@@ -532,6 +542,7 @@ impl InputRow {
             MethodName::Dopri5 => Some(Method::Dopri5),
             MethodName::Dop853 => Some(Method::Dop853),
             MethodName::Rodas4 => Some(Method::Rodas4),
+            MethodName::Radau13 => Some(Method::Radau13),
             MethodName::Auto => Some(Method::Auto),
             MethodName::Rk4 => None,
         };

@@ -5,7 +5,7 @@
 //! Jacobian evaluations), the `ode_solvers` crate's Dop853 on the same Hertz contact (every
 //! method's throughput as a ratio to it at equal tolerance, and host-sim's Dop853 against it
 //! at equal accuracy, [`crate::report::equal_accuracy`]), the heavily damped Adams
-//! contact (c_max = 1 % of k in SI units) for Dopri5, Rodas4 and Auto, and the
+//! contact (c_max = 1 % of k in SI units) for Dopri5, Rodas4, Radau13 and Auto, and the
 //! wall time of an end-to-end evaluation (`evaluate`: integrator, sensor chain, kernel,
 //! scoring) of N impacts of a scene on every core and, optionally, on one.
 //!
@@ -303,7 +303,14 @@ pub fn render(r: &SpeedReport) -> String {
 /// work and its throughput as a ratio to ode_solvers' Dop853 at the same tolerance, with the
 /// larger of its two errors (so that "equal accuracy" can be read off).
 fn ratios(r: &SpeedReport) -> String {
-    let methods = ["dopri5", "dop853", "rodas4", "auto", ODE_SOLVERS_LABEL];
+    let methods = [
+        "dopri5",
+        "dop853",
+        "rodas4",
+        "radau13",
+        "auto",
+        ODE_SOLVERS_LABEL,
+    ];
     let mut s = String::from(
         "\n| Hertz, rtol | method | error (max of F_max or rebound, t_c) | force evals / impact | \
          impacts/s / ode_solvers dop853 |\n| --- | --- | --- | --- | --- |\n",

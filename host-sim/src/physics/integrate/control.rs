@@ -6,6 +6,7 @@ use crate::physics::hertz64::HERTZ_TC_FACTOR;
 use crate::physics::integrate::dop853::dop853_step;
 use crate::physics::integrate::dopri5::dopri_step;
 use crate::physics::integrate::error_scale::ErrorScale;
+use crate::physics::integrate::radau::{RadauState, radau_step};
 use crate::physics::integrate::rhs::{Rhs, Trial, spectral_radius};
 use crate::physics::integrate::rk4::rk4_step;
 use crate::physics::integrate::rodas4::rodas4_step;
@@ -21,16 +22,17 @@ pub(super) const FACMIN: f64 = 0.2;
 pub(super) const FACMAX: f64 = 10.0;
 /// RK4's steps are graded down near first contact, up to scaled time `T1`.
 pub(super) const T1: f64 = 1.0 / 16.0;
-/// [`Method::Auto`] turns to Rodas4 once an accepted explicit step has `h rho(J)` above this
+/// [`Method::Auto`] turns to Radau13 once an accepted explicit step has `h rho(J)` above this
 /// (DOP853's stability region reaches about 6 on the negative real axis; an accuracy-limited
 /// step stays well inside it).
 pub(super) const STIFF_H_RHO: f64 = 4.0;
-/// [`Method::Auto`] turns back to Dop853 after [`CALM_STEPS`] accepted Rodas4 steps with
+/// [`Method::Auto`] turns back to Dop853 after [`CALM_STEPS`] accepted Radau13 steps with
 /// `h rho(J)` below this.
 pub(super) const CALM_H_RHO: f64 = 1.0;
 /// See [`CALM_H_RHO`].
 pub(super) const CALM_STEPS: u32 = 3;
-/// Halvings the clamp's event search may spend on one step of Dop853, Rodas4 and Auto. A
+/// Halvings the clamp's event search may spend on one step of Dop853, Rodas4, Radau13 and
+/// Auto. A
 /// heavily damped contact creeps out along its clamp (the unclamped force stays within
 /// rounding of zero for hundreds of steps), where the enclosures settle nothing and an
 /// unbounded search costs 2^depth evaluations; past this many halvings a part is searched for
@@ -46,6 +48,8 @@ pub(super) enum Stepper {
     Dop853,
     /// Rosenbrock Rodas4.
     Rodas4,
+    /// Radau IIA of order 13.
+    Radau13,
     /// Classical RK4, graded fixed steps.
     Rk4,
 }
@@ -70,7 +74,8 @@ pub(super) struct Gains {
 
 impl Stepper {
     /// Hairer's constants: DOPRI5 (beta 0.04, factors 0.2..10), DOP853 (beta 0, 1/3..6),
-    /// RODAS (no stabilisation, 0.2..6).
+    /// RODAS (no stabilisation, 0.2..6), RADAU5's for order 13 (`err^(1/8)`, 0.2..8; its
+    /// safety factor falls with the Newton iterations, [`StepControl::safety`]).
     fn gains(self) -> Gains {
         match self {
             Stepper::Dopri5 | Stepper::Rk4 => Gains {
@@ -97,17 +102,25 @@ impl Stepper {
                 shrink_expo: -0.25,
                 predictive: true,
             },
+            Stepper::Radau13 => Gains {
+                expo1: 0.125,
+                beta: 0.0,
+                facmin: 0.2,
+                facmax: 8.0,
+                shrink_expo: -0.125,
+                predictive: true,
+            },
         }
     }
 }
 
 /// The step size and its controller: the error-per-step control of the adaptive methods
 /// (with Hairer's stabilisation `facold` for Dopri5), RK4's graded fixed steps, and
-/// [`Method::Auto`]'s choice between Dop853 and Rodas4 from the spectral radius of the exact
+/// [`Method::Auto`]'s choice between Dop853 and Radau13 from the spectral radius of the exact
 /// Jacobian.
 pub(super) struct StepControl {
     pub(super) method: Method,
-    /// The step taken now (for [`Method::Auto`], Dop853 or Rodas4).
+    /// The step taken now (for [`Method::Auto`], Dop853 or Radau13).
     pub(super) stepper: Stepper,
     pub(super) gains: Gains,
     pub(super) tol: Tolerance,
@@ -129,9 +142,11 @@ pub(super) struct StepControl {
     pub(super) h_rk: f64,
     /// RK4's step factor after event retries (1, halved per retry).
     pub(super) retry_scale: f64,
-    /// [`Method::Auto`] on Rodas4: accepted steps in a row with `h rho(J)` below
+    /// [`Method::Auto`] on Radau13: accepted steps in a row with `h rho(J)` below
     /// [`CALM_H_RHO`].
     pub(super) calm: u32,
+    /// Radau13's state between steps (starting values, Jacobian, Newton rate).
+    pub(super) radau: RadauState,
 }
 
 /// `ln 1e-2`, the least error the predictive controller remembers (Hairer's RODAS).
@@ -148,6 +163,7 @@ impl StepControl {
             Method::Dopri5 => Stepper::Dopri5,
             Method::Dop853 | Method::Auto => Stepper::Dop853,
             Method::Rodas4 => Stepper::Rodas4,
+            Method::Radau13 => Stepper::Radau13,
             Method::Rk4 { .. } => Stepper::Rk4,
         };
         // Dopri5 and RK4 keep the step bound; the others take steps as long as their error
@@ -176,6 +192,7 @@ impl StepControl {
             },
             retry_scale: 1.0,
             calm: 0,
+            radau: RadauState::new(),
         }
     }
 
@@ -215,14 +232,15 @@ impl StepControl {
             return Some(self.h);
         }
         let g = self.gains;
+        let safe = self.safety();
         let ln_err = err.ln();
         if err > 1.0 {
             let fac11 = (g.expo1 * ln_err).exp();
-            self.h /= (fac11 / SAFE).min(1.0 / g.facmin);
+            self.h /= (fac11 / safe).min(1.0 / g.facmin);
             self.last_rejected = true;
             return None;
         }
-        let mut fac = ((g.expo1 * ln_err - g.beta * self.ln_facold).exp() / SAFE)
+        let mut fac = ((g.expo1 * ln_err - g.beta * self.ln_facold).exp() / safe)
             .clamp(1.0 / g.facmax, 1.0 / g.facmin);
         if g.predictive {
             if let Some((h_acc, ln_err_acc)) = self.last_accepted {
@@ -240,30 +258,45 @@ impl StepControl {
         Some(h_next)
     }
 
+    /// The step-size controller's safety factor: RADAU5's `0.9 min(1, (2 NIT + 1) /
+    /// (2 NIT + newt))` after a Radau13 trial, else [`SAFE`].
+    fn safety(&self) -> f64 {
+        match self.stepper {
+            Stepper::Radau13 => self.radau.safety,
+            _ => SAFE,
+        }
+    }
+
+    /// After an accepted step (`restart`: one that ended on an event, where the integration
+    /// restarts): Radau13 keeps the step's continuous output and Jacobian for the next one.
+    pub(super) fn accepted_step(&mut self, restart: bool) {
+        self.radau.accepted(restart);
+    }
+
     /// [`Method::Auto`] after an accepted step of size `h` that ended at `y`: Dop853 turns to
-    /// Rodas4 when `h rho(J(y)) > STIFF_H_RHO` (the step is held by stability, not accuracy),
-    /// Rodas4 back to Dop853 after [`CALM_STEPS`] steps with `h rho(J) < CALM_H_RHO`. One
-    /// Jacobian per accepted Dop853 step (Rodas4's own at its step's start serves otherwise);
-    /// nothing for the other methods.
+    /// Radau13 when `h rho(J(y)) > STIFF_H_RHO` (the step is held by stability, not accuracy),
+    /// Radau13 back to Dop853 after [`CALM_STEPS`] steps with `h rho(J) < CALM_H_RHO`. One
+    /// Jacobian per accepted Dop853 step (Radau13's own, at its step's predicted end, serves
+    /// otherwise); nothing for the other methods.
     pub(super) fn choose(&mut self, rhs: &mut Rhs, h: f64, y: [f64; 2]) {
         self.x_peak = self.x_peak.max(y[0]);
         if self.method != Method::Auto {
             return;
         }
-        // On Rodas4 the Jacobian its step just used (at the step's start) serves.
+        // On the stiff stepper the Jacobian its step just used serves.
         let j = match (self.stepper, rhs.last_jac) {
-            (Stepper::Rodas4, Some(j)) => j,
+            (Stepper::Rodas4 | Stepper::Radau13, Some(j)) => j,
             _ => rhs.jac(y),
         };
         let h_rho = h * spectral_radius(j);
         let next = match self.stepper {
-            Stepper::Dop853 if h_rho > STIFF_H_RHO => Stepper::Rodas4,
-            Stepper::Rodas4 if h_rho < CALM_H_RHO => {
+            Stepper::Dop853 if h_rho > STIFF_H_RHO => Stepper::Radau13,
+            Stepper::Radau13 if h_rho < CALM_H_RHO => {
                 self.calm += 1;
                 if self.calm >= CALM_STEPS {
                     Stepper::Dop853
                 } else {
-                    Stepper::Rodas4
+                    Stepper::Radau13
                 }
             }
             other => {
@@ -276,6 +309,7 @@ impl StepControl {
             self.gains = next.gains();
             self.last_accepted = None;
             self.calm = 0;
+            self.radau.reset();
         }
     }
 
@@ -336,11 +370,23 @@ impl StepControl {
 
     /// A step of size `h` from `(t, y, f)` with the current stepper (also the step to an
     /// event).
-    pub(super) fn step(&self, rhs: &mut Rhs, t: f64, y: [f64; 2], f: [f64; 2], h: f64) -> Trial {
+    pub(super) fn step(
+        &mut self,
+        rhs: &mut Rhs,
+        t: f64,
+        y: [f64; 2],
+        f: [f64; 2],
+        h: f64,
+    ) -> Trial {
         match self.stepper {
             Stepper::Dopri5 => dopri_step(rhs, t, y, f, h, self.tol),
             Stepper::Dop853 => dop853_step(rhs, t, y, f, h, &self.error_scale()),
             Stepper::Rodas4 => rodas4_step(rhs, t, y, f, h, &self.error_scale()),
+            Stepper::Radau13 => {
+                let scale = self.error_scale();
+                let retry = self.last_rejected;
+                radau_step(rhs, &mut self.radau, (t, y, f), h, &scale, retry)
+            }
             Stepper::Rk4 => rk4_step(rhs, t, y, f, h),
         }
     }

@@ -21,6 +21,22 @@ pub(super) struct Rhs {
     pub(super) last_jac: Option<[[f64; 2]; 2]>,
     /// The force (N) of the last evaluation.
     pub(super) last_force_n: f64,
+    /// Which force [`Rhs::f_side`] and [`Rhs::jac_side`] take (Radau13's stages).
+    pub(super) side: Side,
+}
+
+/// The force a step on one side of the clamp's switch sees: the law's own (clamped at zero),
+/// or, while every switch is located, its smooth continuation on the current side: the
+/// unclamped force `G` while the force is on, none while the clamp holds it at zero.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Side {
+    /// [`ForceLaw::force`] (undamped Hertz, or once the clamp's switches are no longer
+    /// located).
+    Law,
+    /// [`ForceLaw::unclamped_force`]: the force is on.
+    On,
+    /// No force: the clamp holds it at zero.
+    Off,
 }
 
 impl Rhs {
@@ -29,6 +45,70 @@ impl Rhs {
         let force = self.law.force(y[0] * self.d_m, y[1] * self.u_m_s);
         self.last_force_n = force;
         [self.cx * y[1], self.g - self.p * force]
+    }
+
+    /// [`Rhs::f`] with the force of [`Rhs::side`]: `[cx v, g - p F]` with `F` the law's force,
+    /// the unclamped force `G`, or 0. Counted as a force evaluation.
+    pub(super) fn f_side(&mut self, y: [f64; 2]) -> [f64; 2] {
+        let (d, v) = (y[0] * self.d_m, y[1] * self.u_m_s);
+        let force = match self.side {
+            Side::Law => self.law.force(d, v),
+            Side::On => self.law.unclamped_force(d, v),
+            Side::Off => 0.0,
+        };
+        self.evals += 1;
+        self.last_force_n = force;
+        [self.cx * y[1], self.g - self.p * force]
+    }
+
+    /// The side a state `y` on the clamp's switch (`G = 0`, so that both sides' forces are 0
+    /// there) moves into: the sign of the switching function's rate
+    /// `dG/dtau = dG/ddelta delta_max cx v + dG/ddelta_dot u g` (force 0, gradient of the
+    /// [`ForceLaw::unclamped_force`]); [`Rhs::side`] unchanged where it is 0. Deciding by the
+    /// rate, not by alternating, keeps a sign change that the continuous output shows but the
+    /// solution does not (the creep of a heavily damped contact, where `G` stays within
+    /// rounding of zero) from switching the force off. Counted as a Jacobian evaluation.
+    pub(super) fn side_leaving_switch(&mut self, y: [f64; 2]) -> Side {
+        self.jac_evals += 1;
+        let (dfd, dfv) = self
+            .law
+            .unclamped_force_gradient(y[0] * self.d_m, y[1] * self.u_m_s);
+        let rate = dfd * self.d_m * self.cx * y[1] + dfv * self.u_m_s * self.g;
+        if rate > 0.0 {
+            Side::On
+        } else if rate < 0.0 {
+            Side::Off
+        } else {
+            self.side
+        }
+    }
+
+    /// The force (N) a rate `f` of [`Rhs::f_side`] implies, without an evaluation:
+    /// `max(0, (g - f_v) / p)` (the clamped force), 0 on [`Side::Off`].
+    pub(super) fn force_of_rate(&self, f: [f64; 2]) -> f64 {
+        match self.side {
+            Side::Off => 0.0,
+            Side::Law | Side::On => ((self.g - f[1]) / self.p).max(0.0),
+        }
+    }
+
+    /// [`Rhs::jac`] of [`Rhs::f_side`]: the force's gradient is the law's
+    /// ([`ForceLaw::force_gradient`]), the unclamped force's
+    /// ([`ForceLaw::unclamped_force_gradient`]) or 0. Counted as a Jacobian evaluation.
+    pub(super) fn jac_side(&mut self, y: [f64; 2]) -> [[f64; 2]; 2] {
+        let (d, v) = (y[0] * self.d_m, y[1] * self.u_m_s);
+        let (dfd, dfv) = match self.side {
+            Side::Law => self.law.force_gradient(d, v),
+            Side::On => self.law.unclamped_force_gradient(d, v),
+            Side::Off => (0.0, 0.0),
+        };
+        self.jac_evals += 1;
+        let j = [
+            [0.0, self.cx],
+            [-self.p * self.d_m * dfd, -self.p * self.u_m_s * dfv],
+        ];
+        self.last_jac = Some(j);
+        j
     }
 
     /// The exact Jacobian `d(dx/dtau, dv/dtau) / d(x, v)` at `y`:

@@ -5,7 +5,7 @@ use crate::physics::hertz64::{HERTZ_TC_FACTOR, positive};
 use crate::physics::integrate::control::{StepControl, Stepper};
 use crate::physics::integrate::dense::Segment;
 use crate::physics::integrate::peak::finish;
-use crate::physics::integrate::rhs::{Rhs, Trial};
+use crate::physics::integrate::rhs::{Rhs, Side, Trial};
 use crate::physics::integrate::solution::ContactSolution;
 use crate::physics::integrate::switching::{ClampSwitch, Event, find_event};
 use crate::physics::integrate::{
@@ -123,6 +123,11 @@ impl ContactRun {
             jac_evals: 0,
             last_jac: None,
             last_force_n: 0.0,
+            side: if law.is_clamped() {
+                Side::On
+            } else {
+                Side::Law
+            },
         };
         let y = [0.0, 1.0];
         let f = rhs.f(y);
@@ -194,19 +199,31 @@ impl ContactRun {
         )
     }
 
-    /// After an accepted step (whole or to an event): counts a stiff step, lets
-    /// [`Method::Auto`] choose the next stepper, and sets the next trial step `h_next`.
-    fn accepted(&mut self, ctl: &mut StepControl, h_next: f64) {
-        if ctl.stepper == Stepper::Rodas4 {
+    /// After an accepted step (whole, or to an event where the integration restarts):
+    /// counts a stiff step, lets [`Method::Auto`] choose the next stepper, and sets the next
+    /// trial step `h_next`.
+    fn accepted(&mut self, ctl: &mut StepControl, h_next: f64, restart: bool) {
+        if matches!(ctl.stepper, Stepper::Rodas4 | Stepper::Radau13) {
             self.work.stiff_steps += 1;
         }
+        ctl.accepted_step(restart);
         let h_taken = self.segments.last().map_or(h_next, |s| s.h);
         ctl.choose(&mut self.rhs, h_taken, self.y);
         ctl.advance(h_next);
     }
 
-    /// Takes the accepted `trial` of size `h` whole.
+    /// Takes the accepted `trial` of size `h` whole. Radau13's side of the clamp's switch
+    /// follows the sign of the switching function at the step's end (a step of another
+    /// method, or a sign change the search did not locate, may have crossed it).
     pub(super) fn take(&mut self, trial: Trial, h: f64) {
+        if self.rhs.side != Side::Law {
+            let s = self.clamp_switch.value(trial.y1);
+            if s > 0.0 {
+                self.rhs.side = Side::On;
+            } else if s < 0.0 {
+                self.rhs.side = Side::Off;
+            }
+        }
         self.work.steps += 1;
         self.segments.push(trial.seg);
         self.start_force_n.push(self.force_n);
@@ -251,7 +268,16 @@ impl ContactRun {
         }
         match target {
             Landing::X(_) => self.work.kink_restarts += 1,
-            Landing::Free => self.work.clamp_restarts += 1,
+            Landing::Free => {
+                // The force switched on or off: Radau13's stages now see the other side, or
+                // the law itself once no further switch is located.
+                self.work.clamp_restarts += 1;
+                self.rhs.side = if self.work.clamp_restarts >= MAX_CLAMP_RESTARTS {
+                    Side::Law
+                } else {
+                    self.rhs.side_leaving_switch(y_e)
+                };
+            }
             Landing::V => {
                 self.work.turns += 1;
                 self.rhs.law = self.rhs.law.turned_at(y_e[0] * self.scales.delta_m);
@@ -330,11 +356,11 @@ pub fn integrate_contact(
             Ok(Some(event)) => match run.step_to_event(&mut ctl, event, problem) {
                 EventStep::Retry => {}
                 EventStep::End(solution) => return Ok(*solution),
-                EventStep::Restart => run.accepted(&mut ctl, h_next),
+                EventStep::Restart => run.accepted(&mut ctl, h_next, true),
             },
             Ok(None) => {
                 run.take(trial, ctl.h);
-                run.accepted(&mut ctl, h_next);
+                run.accepted(&mut ctl, h_next, false);
             }
         }
     }

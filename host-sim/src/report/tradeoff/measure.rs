@@ -364,6 +364,7 @@ pub(crate) fn integrator_rows(
             Method::Dopri5 => ("dopri5", case.tol.rtol),
             Method::Dop853 => ("dop853", case.tol.rtol),
             Method::Rodas4 => ("rodas4", case.tol.rtol),
+            Method::Radau13 => ("radau13", case.tol.rtol),
             Method::Auto => ("auto", case.tol.rtol),
             Method::Rk4 { steps_per_tc } => ("rk4", f64::from(steps_per_tc)),
         };
