@@ -269,7 +269,8 @@ pub struct WorkStats {
     pub rejected_steps: usize,
     /// Evaluations of the right-hand side, i.e. of the force law, by the integrator. Not
     /// counted: the event search on the continuous output (for the damped laws one bound and
-    /// two values of the clamp's switching function per step, about 60 more near a switch)
+    /// two values of the clamp's switching function per step, about 60 more near a switch,
+    /// and at a located switch one gradient for the side Radau13 continues on)
     /// and the peak-force search after the run (about 10, plus one per step for a clamped
     /// law).
     pub force_evals: usize,
@@ -281,8 +282,8 @@ pub struct WorkStats {
     /// Stops and restarts where a history-dependent law's penetration turned (0 or 1).
     pub turns: usize,
     /// Evaluations of the exact Jacobian (Rodas4: one per step; Radau13: one per step, two
-    /// after a restart, and one per located clamp switch for its side; Auto: also one per
-    /// accepted Dop853 step, for its choice). Each costs about one force evaluation.
+    /// after a restart; Auto: also one per accepted Dop853 step, for its choice). Each costs
+    /// about one force evaluation.
     pub jacobian_evals: usize,
     /// Accepted steps taken by Rodas4 or Radau13 (for [`Method::Auto`], the stiff part of the
     /// contact).

@@ -67,9 +67,9 @@ impl Rhs {
     /// [`ForceLaw::unclamped_force`]); [`Rhs::side`] unchanged where it is 0. Deciding by the
     /// rate, not by alternating, keeps a sign change that the continuous output shows but the
     /// solution does not (the creep of a heavily damped contact, where `G` stays within
-    /// rounding of zero) from switching the force off. Counted as a Jacobian evaluation.
-    pub(super) fn side_leaving_switch(&mut self, y: [f64; 2]) -> Side {
-        self.jac_evals += 1;
+    /// rounding of zero) from switching the force off. Part of the event's location, and
+    /// like the event search not counted as an evaluation.
+    pub(super) fn side_leaving_switch(&self, y: [f64; 2]) -> Side {
         let (dfd, dfv) = self
             .law
             .unclamped_force_gradient(y[0] * self.d_m, y[1] * self.u_m_s);
