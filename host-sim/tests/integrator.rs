@@ -600,7 +600,7 @@ fn heavy_damping_auto_is_accurate_and_cheaper() {
         let work = auto.work.force_evals + auto.work.jacobian_evals;
         eprintln!(
             "c_max {frac} k: e {:.2e}; Auto 1e-9 errors (delta_max, F, t_c, rebound) {errs:?}, \
-             work {work} ({} Rodas4 steps of {}); Dopri5 1e-9 t_c error {:.1e}, {} force evals",
+             work {work} ({} stiff steps of {}); Dopri5 1e-9 t_c error {:.1e}, {} force evals",
             auto.restitution(),
             auto.work.stiff_steps,
             auto.work.steps,

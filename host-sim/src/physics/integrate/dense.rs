@@ -6,7 +6,8 @@ use crate::physics::events::{MAX_COEFFS, Poly};
 /// `y(theta) = r0 + theta (r1 + (1 - theta) (r2 + theta (r3 + (1 - theta) (r4 + ...))))`
 /// for `theta` in [0, 1], in scaled units, with `n` coefficients per component: 5 for
 /// Dopri5 (`CONTD5`) and RK4 (the cubic Hermite interpolant, `r4 = 0`), 8 for Dop853
-/// (`CONTD8`), 4 for Rodas4 (`(1 - theta) y0 + theta (y1 + (1 - theta) (d2 + theta d3))`).
+/// (`CONTD8`), 4 for Rodas4 (`(1 - theta) y0 + theta (y1 + (1 - theta) (d2 + theta d3))`), 8
+/// for Radau13 (its collocation polynomial through the step's start and its seven stages).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Segment {
     /// Scaled time of the step's start.
