@@ -37,13 +37,13 @@ pub fn scene<M: Backend>() -> Result<Scene<DEFAULT_CLASSES, M>, Error> {
     let sensor = SensorChain::from_plate(100000.0, 50.0, 30.0, 4.0, 16);
     let settings = Settings {
         model_sigma: 1.3953827e-9,
-        skew_tolerance: 0.15206832,
+        skew_tolerance: 0.19732144,
         flat_top_ratio: 1.198807,
         contact: ContactCalibration {
             force_ratio: 1.0,
             duration_ratio: 1.0,
             shape_ratio: 1.0283688,
-            skewness: -0.2590481,
+            skewness: -0.39433333,
             sampled: SampledCalibration {
                 ln_force: [
                     0.0054962863,
