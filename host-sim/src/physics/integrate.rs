@@ -33,7 +33,8 @@
 //!   continuous output. Its stages see the smooth force of the current side of a damped law's
 //!   clamp (the unclamped force while it is on, none while it is off; see Events).
 //! * [`Method::Auto`]: Dop853 where the contact is not stiff, Radau13 where it is (the step
-//!   times the Jacobian's spectral radius). Rodas4 stays selectable on its own.
+//!   times the Jacobian's spectral radius, or that radius alone). Rodas4 stays selectable on
+//!   its own.
 //! * [`Method::Rk4`]: classical fixed-step Runge-Kutta 4 with `N` steps per Hertz contact
 //!   time, graded near the two ends of the contact (see [`Method::Rk4`]).
 //!
@@ -182,9 +183,10 @@ pub enum Method {
     /// order 4 needs many steps.
     Radau13,
     /// Dop853 where the contact is not stiff and Radau13 where it is, chosen after every
-    /// accepted step from the spectral radius `rho` of the exact Jacobian: to Radau13 when
-    /// `h rho > 4` (the explicit step is held by stability), back after 3 Radau13 steps with
-    /// `h rho < 1`.
+    /// accepted step from the spectral radius `rho` of the exact Jacobian (per Hertz contact
+    /// time): to Radau13 when `h rho > 4` (the explicit step is held by stability) or
+    /// `rho > 300` (the contact is stiff, though the step may still be held by accuracy),
+    /// back after 3 Radau13 steps with `h rho < 1` and `rho <= 300`.
     Auto,
     /// Classical fixed-step RK4 with `steps_per_tc` steps per Hertz contact time `T`
     /// (`h = T / N`). Near the two ends of the contact, where `k delta^1.5` is not smooth and

@@ -31,6 +31,13 @@ pub(super) const STIFF_H_RHO: f64 = 4.0;
 pub(super) const CALM_H_RHO: f64 = 1.0;
 /// See [`CALM_H_RHO`].
 pub(super) const CALM_STEPS: u32 = 3;
+/// [`Method::Auto`] also turns to Radau13 where `rho(J)` itself, in units of the Hertz contact
+/// time, is above this, whatever the step, and does not turn back while it is: the contact
+/// is stiff though the explicit step is still held by accuracy (a step of a fiftieth of the
+/// contact time is then at DOP853's stability limit). The heavily damped contact of
+/// `host-sim speed` passes it during its spike and turn, where Dop853 had spent about 950
+/// evaluations; the undamped and the lightly damped contacts stay far below it.
+pub(super) const STIFF_RHO: f64 = 300.0;
 /// Halvings the clamp's event search may spend on one step of Dop853, Rodas4, Radau13 and
 /// Auto. A
 /// heavily damped contact creeps out along its clamp (the unclamped force stays within
@@ -274,8 +281,9 @@ impl StepControl {
     }
 
     /// [`Method::Auto`] after an accepted step of size `h` that ended at `y`: Dop853 turns to
-    /// Radau13 when `h rho(J(y)) > STIFF_H_RHO` (the step is held by stability, not accuracy),
-    /// Radau13 back to Dop853 after [`CALM_STEPS`] steps with `h rho(J) < CALM_H_RHO`. One
+    /// Radau13 when `h rho(J(y)) > STIFF_H_RHO` (the step is held by stability, not accuracy)
+    /// or `rho(J) > STIFF_RHO` (the contact is stiff), Radau13 back to Dop853 after
+    /// [`CALM_STEPS`] steps with `h rho(J) < CALM_H_RHO` and `rho(J) <= STIFF_RHO`. One
     /// Jacobian per accepted Dop853 step (Radau13's own, at its step's predicted end, serves
     /// otherwise); nothing for the other methods.
     pub(super) fn choose(&mut self, rhs: &mut Rhs, h: f64, y: [f64; 2]) {
@@ -288,10 +296,11 @@ impl StepControl {
             (Stepper::Rodas4 | Stepper::Radau13, Some(j)) => j,
             _ => rhs.jac(y),
         };
-        let h_rho = h * spectral_radius(j);
+        let rho = spectral_radius(j);
+        let h_rho = h * rho;
         let next = match self.stepper {
-            Stepper::Dop853 if h_rho > STIFF_H_RHO => Stepper::Radau13,
-            Stepper::Radau13 if h_rho < CALM_H_RHO => {
+            Stepper::Dop853 if h_rho > STIFF_H_RHO || rho > STIFF_RHO => Stepper::Radau13,
+            Stepper::Radau13 if h_rho < CALM_H_RHO && rho <= STIFF_RHO => {
                 self.calm += 1;
                 if self.calm >= CALM_STEPS {
                     Stepper::Dop853
