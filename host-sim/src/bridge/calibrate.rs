@@ -244,22 +244,13 @@ pub struct SkewCheck {
 /// the noise by its noise gain, 1.0-1.6 on the shipped chains; the tolerance's margin of 1.5
 /// covers that.)
 pub fn skewness_cut_excess(series: &[(f64, f64)], skewness_mean: f64, check: &SkewCheck) -> f64 {
-    let (Some(first), Some(last)) = (series.first(), series.last()) else {
-        return 0.0;
-    };
     let peak_counts = series.iter().fold(0.0f64, |m, p| m.max(p.1)) * check.counts_per_n;
     if !(peak_counts > 0.0 && check.trigger_counts > 0.0 && check.sample_rate_hz > 0.0) {
         return 0.0;
     }
-    let dt = 1.0 / check.sample_rate_hz;
     let mut worst = 0.0f64;
     for k in 0..16 {
-        let mut samples = Vec::new();
-        let mut t = first.0 + dt * k as f64 / 16.0;
-        while t < last.0 {
-            samples.push((t, force_at(series, t)));
-            t += dt;
-        }
+        let samples: Vec<(f64, f64)> = phase_samples(series, check.sample_rate_hz, k).collect();
         let above = |p: &&(f64, f64)| p.1 * check.counts_per_n > check.trigger_counts;
         let n = samples.iter().filter(above).count() as f64;
         let sampled_peak = samples.iter().fold(0.0f64, |m, p| m.max(p.1)) * check.counts_per_n;
@@ -275,14 +266,28 @@ pub fn skewness_cut_excess(series: &[(f64, f64)], skewness_mean: f64, check: &Sk
     worst
 }
 
+/// `series` (`(t_s, force_n)`) sampled every `1 / sample_rate_hz` at phase `k` of 16: from
+/// its first time plus `k / 16` of the interval, while before its last time.
+fn phase_samples(
+    series: &[(f64, f64)],
+    sample_rate_hz: f64,
+    k: usize,
+) -> impl Iterator<Item = (f64, f64)> + '_ {
+    let dt = 1.0 / sample_rate_hz;
+    let (first, last) = match (series.first(), series.last()) {
+        (Some(a), Some(b)) => (a.0, b.0),
+        _ => (0.0, 0.0),
+    };
+    std::iter::successors(Some(first + dt * k as f64 / 16.0), move |t| Some(t + dt))
+        .take_while(move |&t| t < last)
+        .map(move |t| (t, force_at(series, t)))
+}
+
 /// The largest `|ln q_sampled - ln q|` of the force series `series` (`(t_s, force_n)`) sampled
 /// every `1 / sample_rate_hz` at 16 phases: `q_sampled = (sum v^2 / (C_ENERGY F^2)) /
 /// (sum v / (C_AREA F))` with the series' own peak `F`, against the same from the fine series.
 /// A skewed pulse of a few samples sums unevenly; the detector's shape check must allow it.
 pub fn sampled_shape_spread(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
-    let (Some(first), Some(last)) = (series.first(), series.last()) else {
-        return 0.0;
-    };
     let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
     if peak <= 0.0 || sample_rate_hz.is_nan() || sample_rate_hz <= 0.0 {
         return 0.0;
@@ -291,17 +296,12 @@ pub fn sampled_shape_spread(series: &[(f64, f64)], sample_rate_hz: f64) -> f64 {
     let fine_sum: f64 = series.iter().map(|p| p.1.max(0.0)).sum();
     let fine_sq: f64 = series.iter().map(|p| p.1.max(0.0).powi(2)).sum();
     let reference = ln_q(fine_sum, fine_sq);
-    let dt = 1.0 / sample_rate_hz;
-    let at = |t: f64| force_at(series, t);
     let mut worst = 0.0f64;
     for k in 0..16 {
         let (mut sum, mut sum_sq) = (0.0, 0.0);
-        let mut t = first.0 + dt * k as f64 / 16.0;
-        while t < last.0 {
-            let v = at(t);
+        for (_, v) in phase_samples(series, sample_rate_hz, k) {
             sum += v;
             sum_sq += v * v;
-            t += dt;
         }
         if sum > 0.0 {
             worst = worst.max((ln_q(sum, sum_sq) - reference).abs());

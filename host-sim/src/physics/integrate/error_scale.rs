@@ -31,4 +31,15 @@ impl ErrorScale {
         let floor = if i == 0 { self.x_peak } else { 0.0 };
         (self.tol.rtol * m + self.tol.atol * m.max(floor).min(1.0)).max(f64::MIN_POSITIVE)
     }
+
+    /// The RMS norm `sqrt(((e_x / sk_x)^2 + (e_v / sk_v)^2) / 2)` of a step's error `e` from
+    /// `y0` to `y1`.
+    pub(super) fn norm(&self, e: [f64; 2], y0: [f64; 2], y1: [f64; 2]) -> f64 {
+        let mut sum = 0.0;
+        for i in 0..2 {
+            let q = e[i] / self.sk(i, y0[i], y1[i]);
+            sum += q * q;
+        }
+        (sum / 2.0).sqrt()
+    }
 }

@@ -260,15 +260,13 @@ fn estimate(
     if det == 0.0 || !det.is_finite() {
         return f64::INFINITY;
     }
-    let sk = [scale.sk(0, y[0], y1[0]), scale.sk(1, y[1], y1[1])];
     let err_of = |f: [f64; 2]| {
         let b = [hg * f[0] + ez[0], hg * f[1] + ez[1]];
         let e = [
             (m[1][1] * b[0] - m[0][1] * b[1]) / det,
             (m[0][0] * b[1] - m[1][0] * b[0]) / det,
         ];
-        let norm = ((e[0] / sk[0]).powi(2) + (e[1] / sk[1]).powi(2)) / 2.0;
-        (norm.sqrt(), e)
+        (scale.norm(e, y, y1), e)
     };
     let (err, e) = err_of(f0);
     if err >= 1.0 && filter {

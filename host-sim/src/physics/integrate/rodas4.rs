@@ -125,12 +125,7 @@ pub(super) fn rodas4_step(
         ks[s] = solve([dy[0] + c[0] / h, dy[1] + c[1] / h]);
     }
     let y1 = [ynew[0] + ks[5][0], ynew[1] + ks[5][1]];
-    let mut err2 = 0.0;
-    for i in 0..2 {
-        let e = ks[5][i] / scale.sk(i, y[i], y1[i]);
-        err2 += e * e;
-    }
-    let err = (err2 / 2.0).sqrt();
+    let err = scale.norm(ks[5], y, y1);
     let (f1, force1_n) = if err <= 1.0 {
         (rhs.f(y1), rhs.last_force_n)
     } else {
