@@ -41,8 +41,13 @@ pub(super) enum Side {
 
 impl Rhs {
     pub(super) fn f(&mut self, y: [f64; 2]) -> [f64; 2] {
-        self.evals += 1;
         let force = self.law.force(y[0] * self.d_m, y[1] * self.u_m_s);
+        self.rates(y, force)
+    }
+
+    /// `[cx v, g - p F]` at `y` for the force `F` (N), counted as one force evaluation.
+    fn rates(&mut self, y: [f64; 2], force: f64) -> [f64; 2] {
+        self.evals += 1;
         self.last_force_n = force;
         [self.cx * y[1], self.g - self.p * force]
     }
@@ -56,9 +61,7 @@ impl Rhs {
             Side::On => self.law.unclamped_force(d, v),
             Side::Off => 0.0,
         };
-        self.evals += 1;
-        self.last_force_n = force;
-        [self.cx * y[1], self.g - self.p * force]
+        self.rates(y, force)
     }
 
     /// The side a state `y` on the clamp's switch (`G = 0`, so that both sides' forces are 0
@@ -102,21 +105,21 @@ impl Rhs {
             Side::On => self.law.unclamped_force_gradient(d, v),
             Side::Off => (0.0, 0.0),
         };
-        self.jac_evals += 1;
-        let j = [
-            [0.0, self.cx],
-            [-self.p * self.d_m * dfd, -self.p * self.u_m_s * dfv],
-        ];
-        self.last_jac = Some(j);
-        j
+        self.jacobian(dfd, dfv)
     }
 
     /// The exact Jacobian `d(dx/dtau, dv/dtau) / d(x, v)` at `y`:
     /// `[[0, cx], [-p delta_max dF/ddelta, -p u dF/ddelta_dot]]` from
     /// [`ForceLaw::force_gradient`] (rows: the two rates).
     pub(super) fn jac(&mut self, y: [f64; 2]) -> [[f64; 2]; 2] {
-        self.jac_evals += 1;
         let (dfd, dfv) = self.law.force_gradient(y[0] * self.d_m, y[1] * self.u_m_s);
+        self.jacobian(dfd, dfv)
+    }
+
+    /// `[[0, cx], [-p delta_max dfd, -p u dfv]]` for the force's gradient `(dfd, dfv)` (N/m,
+    /// N s/m), counted as one Jacobian evaluation.
+    fn jacobian(&mut self, dfd: f64, dfv: f64) -> [[f64; 2]; 2] {
+        self.jac_evals += 1;
         let j = [
             [0.0, self.cx],
             [-self.p * self.d_m * dfd, -self.p * self.u_m_s * dfv],
