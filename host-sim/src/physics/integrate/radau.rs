@@ -22,13 +22,15 @@
 //! while the clamp holds it at zero, so that the stage equations stay smooth; the clamp's
 //! switch is then an event that ends the step (`switching`), where the side flips.
 
-use crate::physics::integrate::control::SAFE;
 use crate::physics::integrate::dense::Segment;
 use crate::physics::integrate::error_scale::ErrorScale;
 use crate::physics::integrate::lu::Lu;
 use crate::physics::integrate::radau_tableau::{A, A_INV_LAST, C, DENSE, E, GAMMA0, S};
 use crate::physics::integrate::rhs::{Rhs, Trial};
 
+/// RADAU5's safety factor (its `SAFE`, 0.9 as in the other methods' controller), which
+/// [`RadauState::safety`] lowers with the Newton iterations.
+const SAFE: f64 = 0.9;
 /// Newton iterations per step at most (RADAU5's `NIT`).
 const NIT: usize = 7;
 /// Newton's stopping constant (`faccon |dZ| <= KAPPA`, on the error scale).
