@@ -379,3 +379,21 @@ fn impacts_far_outside_hertz_theory_are_warned_about() {
         assert_eq!(!cell(&h, &row, "warning").is_empty(), warned, "u = {u}");
     }
 }
+
+/// `jacobian_evals` counts the implicit methods' Jacobians apart from the force evaluations:
+/// Radau13 takes at least one per accepted step (one per step's end, reused by the next), the
+/// explicit Dop853 none.
+#[test]
+fn jacobians_are_counted_apart_for_the_implicit_methods() {
+    let base = ["--material", "coal", "--radius", "0.03", "--speed", "3"];
+    let num = |method: &str, name: &str| {
+        let args: Vec<&str> = base.iter().copied().chain(["--method", method]).collect();
+        let (header, row, err) = single(&args);
+        cell(&header, &row, name)
+            .parse::<f64>()
+            .unwrap_or_else(|_| panic!("{name} of {method}: {err}"))
+    };
+    assert_eq!(num("dop853", "jacobian_evals"), 0.0);
+    let (jacobians, steps) = (num("radau13", "jacobian_evals"), num("radau13", "steps"));
+    assert!(jacobians >= steps && jacobians > 0.0, "{jacobians} {steps}");
+}

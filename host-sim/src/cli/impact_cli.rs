@@ -55,8 +55,9 @@ use crate::scene::MaterialName;
 /// `hertz_stiffness_n_m1_5` (`k = 4/3 E* sqrt(R)`, N/m^1.5), `mass_kg`
 /// (`m = 4/3 pi rho R^3`), `hertz_delta_max_m` (`(5 m u^2 / (4 k))^(2/5)`),
 /// `hertz_peak_force_n` (`k delta_max^(3/2)`), `hertz_duration_s` (`2.9432752 delta_max / u`).
-/// Then the integrator's work: `steps`, `rejected_steps`, `force_evals`.
-pub const RESULT_COLUMNS: [&str; 15] = [
+/// Then the integrator's work: `steps`, `rejected_steps`, `force_evals`, `jacobian_evals`
+/// (Rodas4 and Radau13; 0 for the explicit methods).
+pub const RESULT_COLUMNS: [&str; 16] = [
     "delta_max_m",
     "peak_force_n",
     "duration_s",
@@ -72,6 +73,7 @@ pub const RESULT_COLUMNS: [&str; 15] = [
     "steps",
     "rejected_steps",
     "force_evals",
+    "jacobian_evals",
 ];
 
 /// A named material ([`MaterialName::from_name`], the list scene files use).
@@ -260,6 +262,7 @@ fn result_cells(report: Option<&ImpactReport>, hertz: Option<&HertzImpact64>) ->
         n(report.map(|r| r.steps)),
         n(report.map(|r| r.rejected_steps)),
         n(report.map(|r| r.force_evals)),
+        n(report.map(|r| r.jacobian_evals)),
     ]
 }
 

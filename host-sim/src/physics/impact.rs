@@ -94,6 +94,9 @@ pub struct ImpactReport {
     /// Force-law evaluations by the integrator (for an Adams law built from a restitution,
     /// the search for `c_max` is not included).
     pub force_evals: usize,
+    /// Jacobian evaluations by an implicit method (Rodas4, Radau13; 0 for the explicit ones):
+    /// each costs about one force evaluation (the exact 2 x 2 Jacobian of the force law).
+    pub jacobian_evals: usize,
     /// Force-time series `(t_s, force_n)` every `record` seconds from first contact, if
     /// requested.
     pub force_series: Option<Vec<(f64, f64)>>,
@@ -128,6 +131,7 @@ pub fn simulate(spec: &ImpactSpec) -> Result<ImpactReport, SimError> {
         steps: sol.work.steps,
         rejected_steps: sol.work.rejected_steps,
         force_evals: sol.work.force_evals,
+        jacobian_evals: sol.work.jacobian_evals,
         force_series,
     })
 }
