@@ -216,3 +216,59 @@ fn a_stream_ending_inside_a_pulse_is_identified() {
     let id = identify(&stream.samples, &opts).expect("identified");
     assert_eq!(id.modes.len(), scene.sensor.beam_modes.len(), "{id:?}");
 }
+
+/// The `chain_tolerance` identify prints bounds every identified parameter's error on the
+/// tail beam (100 kS/s, seeds 11-13), the MEMS chain (26.7 kS/s, seeds 1-3) and the piezo
+/// chain (seeds 1, 2); it is printed in the table; behind the MEMS band, which is not
+/// identified, it keeps the default damping tolerance (0.3). The errors are against the
+/// simulated chain (`cargo test -p host-sim --test identify tolerance -- --nocapture`).
+#[test]
+fn the_printed_tolerance_bounds_the_errors() {
+    let mut paper = SceneFile::paper();
+    paper.sensor.beam_modes = tail_beam();
+    let mems = common::shipped_scene("mems_chain.toml");
+    let piezo = common::shipped_scene("piezo_chain.toml");
+    let runs = [
+        (&paper, [11, 12, 13].as_slice()),
+        (&mems, &[1, 2, 3]),
+        (&piezo, &[1, 2]),
+    ];
+    for (scene, seeds) in runs {
+        for &seed in seeds {
+            let stream = generate(scene, 60, seed, &StreamOptions::default()).expect("stream");
+            let spec = &scene.sensor;
+            let opts = IdentifyOptions {
+                sample_rate_hz: spec.sample_rate_hz,
+                modes: Some(spec.beam_modes.len()),
+                accelerometer: spec.accelerometer.is_some(),
+                noise_rms_counts: None,
+            };
+            let id = identify(&stream.samples, &opts).expect("identified");
+            let [tf, tz, tg] = id.chain_tolerance();
+            println!("{} seed {seed}: tolerance {tf} / {tz} / {tg}", scene.name);
+            assert_eq!(id.modes.len(), spec.beam_modes.len(), "{id:?}");
+            assert!(id.to_toml().contains("chain_tolerance = { frequency = "));
+            if spec.accelerometer.is_some() && id.accelerometer.is_none() {
+                assert!(
+                    tz >= 0.3,
+                    "damping tolerance {tz} behind an unidentified band"
+                );
+            }
+            for (m, t) in id.modes.iter().zip(&spec.beam_modes) {
+                let ef = (m.frequency_hz.value / t.frequency_hz - 1.0).abs();
+                let ez = (m.damping_ratio.value / t.damping_ratio - 1.0).abs();
+                let eg = (m.gain.value / t.gain - 1.0).abs();
+                println!(
+                    "  {} Hz: errors {ef:.2e} / {ez:.3} / {eg:.3}",
+                    t.frequency_hz
+                );
+                assert!(ef <= tf && ez <= tz && eg <= tg, "{t:?}: {m:?}");
+            }
+            if let (Some(t), Some(a)) = (&spec.accelerometer, &id.accelerometer) {
+                let ef = (a.frequency_hz.value / t.frequency_hz - 1.0).abs();
+                let ez = (a.damping_ratio.value / t.damping_ratio - 1.0).abs();
+                assert!(ef <= tf && ez <= tz, "{t:?}: {a:?}");
+            }
+        }
+    }
+}

@@ -1172,6 +1172,27 @@ fn identify_accelerometer(
     })
 }
 
+/// A stated chain tolerance is a bound on each parameter's error: this many jackknife standard
+/// errors.
+pub const TOLERANCE_SIGMAS: f64 = 3.0;
+
+/// The smallest relative tolerance stated for `[frequency, damping, gain]`: the largest errors
+/// measured on host-sim's streams of 60 impacts (0.14 % in frequency, 13 % in damping, 4.5 % in
+/// gain; `docs/chain.md`, "Identification"), with a margin. The jackknife does not see the
+/// bias behind them: the slowest mode's damping comes out 5-13 % high with a standard error
+/// of about 1.5 % (a gap of 2-10 ms covers a third to two of its periods).
+pub const TOLERANCE_FLOOR: [f64; 3] = [2e-3, 0.15, 0.05];
+
+/// `x` rounded up to two significant digits (within a millionth of a digit counts as on it, so that a
+/// value converted from f32 stays put).
+fn round_up_2(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return x;
+    }
+    let scale = 10f64.powi(1 - x.log10().floor() as i32);
+    (x * scale * (1.0 - 1e-6)).ceil() / scale
+}
+
 /// Significant digits for a value with standard error `se`: two digits of the error.
 fn fmt_value(v: f64, se: f64) -> String {
     let digits = if se.is_finite() && se > 0.0 {
@@ -1216,6 +1237,35 @@ impl Identification {
         s
     }
 
+    /// The scene's `chain_tolerance` this identification supports, `[frequency, damping,
+    /// gain]` (relative): for each, the largest [`TOLERANCE_SIGMAS`] `sigma / |value|` over the
+    /// identified beam modes and resonance (a resonance has no gain), at least
+    /// [`TOLERANCE_FLOOR`], rounded up to two digits. A resonance asked for and not identified
+    /// keeps the datasheet's value, known to the kernel's default damping tolerance
+    /// (`ChainTolerance::IDENTIFIED`, 30 %).
+    pub fn chain_tolerance(&self) -> [f64; 3] {
+        let relative = |e: Estimate| TOLERANCE_SIGMAS * e.std_error / e.value.abs();
+        let mut t = TOLERANCE_FLOOR;
+        let stages = self
+            .modes
+            .iter()
+            .map(|m| [m.frequency_hz, m.damping_ratio, m.gain]);
+        for [f, z, g] in stages {
+            t = [
+                t[0].max(relative(f)),
+                t[1].max(relative(z)),
+                t[2].max(relative(g)),
+            ];
+        }
+        if let Some(a) = &self.accelerometer {
+            t[0] = t[0].max(relative(a.frequency_hz));
+            t[1] = t[1].max(relative(a.damping_ratio));
+        } else if self.accelerometer_asked {
+            t[1] = t[1].max(f64::from(coalshock::ChainTolerance::IDENTIFIED.damping));
+        }
+        t.map(round_up_2)
+    }
+
     /// The `[sensor]` table (identified entries only), with standard errors as comments.
     pub fn to_toml(&self) -> String {
         let mut s = self.toml_header();
@@ -1225,12 +1275,19 @@ impl Identification {
             "noise_rms_counts = {}\n",
             fmt_value(self.noise_rms_counts, 0.01)
         ));
+        let [f, z, g] = self.chain_tolerance();
+        s.push_str(&format!(
+            "chain_tolerance = {{ frequency = {f}, damping = {z}, gain = {g} }}  # the larger of \
+             {} standard errors and the errors on simulated streams\n",
+            TOLERANCE_SIGMAS
+        ));
         if self.accelerometer_asked && self.accelerometer.is_none() {
             s.push_str(
                 "# accelerometer: not identified: no resonance rings after the pulses \
                  consistently (none, one above the\n# Nyquist frequency, or one damped so \
                  heavily that it rings for a sample or two, as a MEMS part's\n# band at zeta \
-                 0.7 does at 26.7 kS/s). Keep the datasheet's value.\n",
+                 0.7 does at 26.7 kS/s). Keep the datasheet's value; chain_tolerance's\n# damping \
+                 is the default's, 0.3, for it.\n",
             );
         }
         if let Some(a) = &self.accelerometer {
