@@ -78,8 +78,10 @@
 //! located switches its stages take the clamped force.
 //!
 //! # Per-step cost
-//! The step controller's factor `err^(0.2 - 0.75 beta) / facold^beta` is one `exp` of
-//! logarithms (`ln facold` is kept), not two `powf`; a series of the force at increasing times
+//! The step controller's factor is `err^(1/8)` for Dop853 and Radau13 and `err^(1/4)` for
+//! Rodas4, taken by three and two square roots (no `exp` or `ln`; the predictive controller
+//! keeps the last accepted error to that power), and Dopri5's `err^(0.2 - 0.75 beta) /
+//! facold^beta` one `exp` of logarithms (`ln facold` is kept), not two `powf`; a series of the force at increasing times
 //! walks the steps instead of searching them.
 //!
 //! A history-dependent law ([`ForceLaw::awaits_turn`]: Thornton's elastic-plastic contact)

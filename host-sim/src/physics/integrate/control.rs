@@ -137,13 +137,15 @@ pub(super) struct StepControl {
     pub(super) h: f64,
     /// Largest step.
     pub(super) hmax: f64,
-    /// ln of Hairer's `facold` (the last accepted error, at least 1e-4): the controller's
-    /// factor `err^expo1 / facold^beta` is one exp of logs, not two powf.
+    /// ln of Hairer's `facold` (the last accepted error, at least 1e-4), for the steppers
+    /// with `beta > 0` (Dopri5): the controller's factor `err^expo1 / facold^beta` is one exp
+    /// of logs, not two powf. The others take `err^expo1` alone ([`err_power`]).
     pub(super) ln_facold: f64,
     /// Whether the last trial was rejected (then the step may not grow).
     pub(super) last_rejected: bool,
-    /// The last accepted step of this stepper and ln of its error (at least `ln 1e-2`), for
-    /// the predictive controller ([`Gains::predictive`]); `None` before the first.
+    /// The last accepted step of this stepper and its error to the power `expo1` (the error
+    /// at least 1e-2), for the predictive controller ([`Gains::predictive`]); `None` before
+    /// the first.
     pub(super) last_accepted: Option<(f64, f64)>,
     /// RK4's ungraded step `1 / steps_per_tc` (0 for the adaptive methods).
     pub(super) h_rk: f64,
@@ -156,8 +158,22 @@ pub(super) struct StepControl {
     pub(super) radau: RadauState,
 }
 
-/// `ln 1e-2`, the least error the predictive controller remembers (Hairer's RODAS).
-const LN_ERR_ACC_MIN: f64 = -4.605_170_185_988_091;
+/// The least error the predictive controller remembers (Hairer's RODAS).
+const ERR_ACC_MIN: f64 = 1e-2;
+
+/// `err^expo`: by square roots for the exponents 1/8 (Dop853, Radau13) and 1/4 (Rodas4),
+/// `sqrt(sqrt(sqrt(err)))` and `sqrt(sqrt(err))`, each correctly rounded, so the result is
+/// within a few ulps of the exact power and needs no `exp` or `ln`; `exp(expo ln err)`
+/// otherwise (Dopri5's `0.2 - 0.75 beta`, as it always was).
+pub(super) fn err_power(err: f64, expo: f64) -> f64 {
+    if expo == 0.125 {
+        err.sqrt().sqrt().sqrt()
+    } else if expo == 0.25 {
+        err.sqrt().sqrt()
+    } else {
+        (expo * err.ln()).exp()
+    }
+}
 
 /// `ln 1e-4`, the least `ln facold`.
 pub(super) fn ln_facold_min() -> f64 {
@@ -240,23 +256,28 @@ impl StepControl {
         }
         let g = self.gains;
         let safe = self.safety();
-        let ln_err = err.ln();
+        let q = err_power(err, g.expo1);
         if err > 1.0 {
-            let fac11 = (g.expo1 * ln_err).exp();
-            self.h /= (fac11 / safe).min(1.0 / g.facmin);
+            self.h /= (q / safe).min(1.0 / g.facmin);
             self.last_rejected = true;
             return None;
         }
-        let mut fac = ((g.expo1 * ln_err - g.beta * self.ln_facold).exp() / safe)
-            .clamp(1.0 / g.facmax, 1.0 / g.facmin);
+        let mut fac = if g.beta == 0.0 {
+            q / safe
+        } else {
+            let ln_err = err.ln();
+            let f = (g.expo1 * ln_err - g.beta * self.ln_facold).exp() / safe;
+            self.ln_facold = ln_err.max(ln_facold_min());
+            f
+        }
+        .clamp(1.0 / g.facmax, 1.0 / g.facmin);
         if g.predictive {
-            if let Some((h_acc, ln_err_acc)) = self.last_accepted {
-                let gus = h_acc / self.h * (g.expo1 * (2.0 * ln_err - ln_err_acc)).exp() / SAFE;
+            if let Some((h_acc, q_acc)) = self.last_accepted {
+                let gus = h_acc / self.h * (q * q / q_acc) / SAFE;
                 fac = fac.max(gus.clamp(1.0 / g.facmax, 1.0 / g.facmin));
             }
-            self.last_accepted = Some((self.h, ln_err.max(LN_ERR_ACC_MIN)));
+            self.last_accepted = Some((self.h, q.max(err_power(ERR_ACC_MIN, g.expo1))));
         }
-        self.ln_facold = ln_err.max(ln_facold_min());
         let mut h_next = (self.h / fac).min(self.hmax);
         if self.last_rejected {
             h_next = h_next.min(self.h);

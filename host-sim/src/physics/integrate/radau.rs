@@ -80,8 +80,13 @@ impl RadauState {
     /// The last trial was accepted: its carry serves the next step, unless the integration
     /// restarts there (an event: the law, or the side of the clamp, changes).
     pub(super) fn accepted(&mut self, restart: bool) {
-        let pending = self.pending.take();
-        self.carry = if restart { None } else { pending };
+        if restart || self.pending.is_none() {
+            // Writes the two tags only: an explicit stepper's accepted step copies nothing.
+            self.carry = None;
+            self.pending = None;
+        } else {
+            self.carry = self.pending.take();
+        }
     }
 
     /// Forgets the previous steps (another stepper took over).
