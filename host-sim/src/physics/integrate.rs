@@ -81,7 +81,10 @@
 //! The step controller's factor is `err^(1/8)` for Dop853 and Radau13 and `err^(1/4)` for
 //! Rodas4, taken by three and two square roots (no `exp` or `ln`; the predictive controller
 //! keeps the last accepted error to that power), and Dopri5's `err^(0.2 - 0.75 beta) /
-//! facold^beta` one `exp` of logarithms (`ln facold` is kept), not two `powf`; a series of the force at increasing times
+//! facold^beta` one `exp` of logarithms (`ln facold` is kept), not two `powf`. The undamped
+//! Hertz force is taken in scaled units, `p k delta_max^1.5 x^1.5` with the constant hoisted
+//! (one square root per evaluation, no unit conversion), and each Dop853 stage adds its newest
+//! slope last, to a sum of the older ones formed while that slope is evaluated; a series of the force at increasing times
 //! walks the steps instead of searching them.
 //!
 //! A history-dependent law ([`ForceLaw::awaits_turn`]: Thornton's elastic-plastic contact)

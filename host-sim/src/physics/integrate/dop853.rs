@@ -393,7 +393,9 @@ const B_NONZERO: [usize; 8] = [0, 5, 6, 7, 8, 9, 10, 11];
 /// The stages where the rows of [`D`] are non-zero.
 const D_NONZERO: [usize; 12] = [0, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15];
 
-/// `y + h sum_j a_j k_j` over the `(j, a_j)` given.
+/// `y + h sum_j a_j k_j` over the `(j, a_j)` given, as `(y + h s) + (h a_l) k_l` with `k_l`
+/// the last (the newest slope) and `s` the sum of the others: these are known a stage
+/// earlier, so the next stage waits on the newest slope for one multiply and one add only.
 #[inline(always)]
 fn combine<const N: usize>(
     y: [f64; 2],
@@ -402,11 +404,15 @@ fn combine<const N: usize>(
     ks: &[[f64; 2]; 16],
 ) -> [f64; 2] {
     let (mut s0, mut s1) = (0.0, 0.0);
-    for &(j, aj) in terms {
+    for &(j, aj) in &terms[..N - 1] {
         s0 += aj * ks[j][0];
         s1 += aj * ks[j][1];
     }
-    [y[0] + h * s0, y[1] + h * s1]
+    let (jl, hal) = (terms[N - 1].0, h * terms[N - 1].1);
+    [
+        (y[0] + h * s0) + hal * ks[jl][0],
+        (y[1] + h * s1) + hal * ks[jl][1],
+    ]
 }
 
 /// `sum_j c_j k_j[i]` over the stages `j` in `idx`.

@@ -23,6 +23,10 @@ pub(super) struct Rhs {
     pub(super) last_force_n: f64,
     /// Which force [`Rhs::f_side`] and [`Rhs::jac_side`] take (Radau13's stages).
     pub(super) side: Side,
+    /// For the undamped Hertz law with `n = 1.5` ([`Rhs::hertz_scaled`]): `(k delta_max^1.5`
+    /// in N, `p k delta_max^1.5)`, so that [`Rhs::f`] is `[cx v, g - p k delta_max^1.5
+    /// x^1.5]` with one square root and no unit conversion; `None` for every other law.
+    pub(super) hertz: Option<(f64, f64)>,
 }
 
 /// The force a step on one side of the clamp's switch sees: the law's own (clamped at zero),
@@ -40,9 +44,40 @@ pub(super) enum Side {
 }
 
 impl Rhs {
+    /// `[cx v, g - p F(x delta_max, v u)]` at the scaled state `y`: the law's force, or for
+    /// undamped Hertz `F = k delta_max^1.5 x^1.5` (`x > 0`, else 0) with the constant hoisted
+    /// ([`Rhs::hertz`]).
     pub(super) fn f(&mut self, y: [f64; 2]) -> [f64; 2] {
+        if let Some((force_scale, rate_scale)) = self.hertz {
+            let x = y[0];
+            let q = if x > 0.0 { x * x.sqrt() } else { 0.0 };
+            self.evals += 1;
+            self.last_force_n = force_scale * q;
+            return [self.cx * y[1], self.g - rate_scale * q];
+        }
         let force = self.law.force(y[0] * self.d_m, y[1] * self.u_m_s);
         self.rates(y, force)
+    }
+
+    /// [`Rhs::hertz`] for `law`: `Some((k delta_max^1.5, p k delta_max^1.5))` (N, and per
+    /// scaled time) for [`ForceLaw::Hertz`] with `n = 1.5`, else `None`.
+    pub(super) fn hertz_scaled(law: &ForceLaw, d_m: f64, p: f64) -> Option<(f64, f64)> {
+        match *law {
+            ForceLaw::Hertz {
+                stiffness,
+                exponent: 1.5,
+            } => {
+                let force_scale = stiffness * d_m * d_m.sqrt();
+                Some((force_scale, p * force_scale))
+            }
+            _ => None,
+        }
+    }
+
+    /// Puts `law` in force (the law after a history-dependent law's turn).
+    pub(super) fn set_law(&mut self, law: ForceLaw) {
+        self.law = law;
+        self.hertz = Self::hertz_scaled(&law, self.d_m, self.p);
     }
 
     /// `[cx v, g - p F]` at `y` for the force `F` (N), counted as one force evaluation.

@@ -112,13 +112,14 @@ impl ContactRun {
     pub(super) fn new(problem: &ContactProblem, scales: Scales) -> Self {
         let law = problem.law;
         let (d_m, u, time_s) = (scales.delta_m, scales.speed_m_s, scales.time_s);
+        let p = time_s / (u * problem.mass_kg);
         let mut rhs = Rhs {
             law,
             d_m,
             u_m_s: u,
             cx: HERTZ_TC_FACTOR,
             g: time_s * problem.gravity_m_s2 / u,
-            p: time_s / (u * problem.mass_kg),
+            p,
             evals: 0,
             jac_evals: 0,
             last_jac: None,
@@ -128,6 +129,7 @@ impl ContactRun {
             } else {
                 Side::Law
             },
+            hertz: Rhs::hertz_scaled(&law, d_m, p),
         };
         let y = [0.0, 1.0];
         let f = rhs.f(y);
@@ -280,7 +282,8 @@ impl ContactRun {
             }
             Landing::V => {
                 self.work.turns += 1;
-                self.rhs.law = self.rhs.law.turned_at(y_e[0] * self.scales.delta_m);
+                self.rhs
+                    .set_law(self.rhs.law.turned_at(y_e[0] * self.scales.delta_m));
                 self.clamp_switch.law = self.rhs.law;
                 self.x_kink = self.rhs.law.kink_m().map(|d| d / self.scales.delta_m);
                 self.turned = Some((t_e, self.rhs.law));
