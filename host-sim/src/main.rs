@@ -88,6 +88,11 @@ struct IdentifyArgs {
     /// Also estimate the accelerometer's resonance.
     #[arg(long)]
     accelerometer: bool,
+    /// The contact is undamped Hertz (`law = "hertz"`): fit the accelerometer's band to the
+    /// pulses' known shape rather than to its ring after them (with --accelerometer; for a
+    /// band too damped to ring, such as a MEMS part's).
+    #[arg(long)]
+    hertz_pulses: bool,
     /// Noise RMS in counts (default: estimated from the stream).
     #[arg(long)]
     noise_rms: Option<f64>,
@@ -99,6 +104,7 @@ impl IdentifyArgs {
             sample_rate_hz: self.sample_rate,
             modes: self.modes,
             accelerometer: self.accelerometer,
+            hertz_pulses: self.hertz_pulses,
             noise_rms_counts: self.noise_rms,
         }
     }

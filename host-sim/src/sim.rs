@@ -1,8 +1,10 @@
 //! Layer 3, sim: what the node's accelerometer would record — the sensor chain, labelled
 //! sample streams, their generation, faults and files. Imports physics and scene.
 
+pub mod band_fit;
 pub mod faults;
 pub mod generate;
+pub mod hertz_response;
 pub mod identify;
 pub mod par;
 pub mod sensor;

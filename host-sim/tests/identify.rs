@@ -6,7 +6,8 @@
 //! windows). Asserted:
 //! frequency within 1 %, damping within 20 %, gain within 10 % of the spec; the resonance's
 //! frequency within 1 % and damping within 20 %, or, for the MEMS band, that it is reported as
-//! not identified. The measured errors are printed
+//! not identified from its ring, and found within 0.6 % from the pulses' Hertz shape
+//! (`--hertz-pulses`). The measured errors are printed
 //! (`cargo test -p host-sim --test identify -- --nocapture`).
 
 mod common;
@@ -51,6 +52,7 @@ fn check_resonance(
         sample_rate_hz: spec.sample_rate_hz,
         modes,
         accelerometer: spec.accelerometer.is_some(),
+        hertz_pulses: false,
         noise_rms_counts: None,
     };
     let id = identify(&stream.samples, &opts).expect("identified");
@@ -171,6 +173,7 @@ fn no_resonance_is_reported_when_the_chain_has_none() {
         sample_rate_hz: scene.sensor.sample_rate_hz,
         modes: Some(2),
         accelerometer: true,
+        hertz_pulses: false,
         noise_rms_counts: Some(4.0),
     };
     let id = identify(&stream.samples, &opts).expect("identified");
@@ -187,6 +190,7 @@ fn too_few_pulses_and_bad_options_are_errors() {
         sample_rate_hz: 100_000.0,
         modes: None,
         accelerometer: false,
+        hertz_pulses: false,
         noise_rms_counts: None,
     };
     let e = identify(&quiet, &opts).expect_err("no pulses");
@@ -197,6 +201,12 @@ fn too_few_pulses_and_bad_options_are_errors() {
     };
     let e = identify(&quiet, &bad).expect_err("bad rate");
     assert!(e.to_string().starts_with("--sample-rate"), "{e}");
+    let shape_without_band = IdentifyOptions {
+        hertz_pulses: true,
+        ..opts
+    };
+    let e = identify(&quiet, &shape_without_band).expect_err("no --accelerometer");
+    assert!(e.to_string().starts_with("--hertz-pulses"), "{e}");
 }
 
 /// A stream that ends inside a pulse (its last free window would start past the data) is
@@ -211,6 +221,7 @@ fn a_stream_ending_inside_a_pulse_is_identified() {
         sample_rate_hz: scene.sensor.sample_rate_hz,
         modes: None,
         accelerometer: true,
+        hertz_pulses: false,
         noise_rms_counts: None,
     };
     let id = identify(&stream.samples, &opts).expect("identified");
@@ -242,6 +253,7 @@ fn the_printed_tolerance_bounds_the_errors() {
                 modes: Some(spec.beam_modes.len()),
                 accelerometer: spec.accelerometer.is_some(),
                 noise_rms_counts: None,
+                hertz_pulses: false,
             };
             let id = identify(&stream.samples, &opts).expect("identified");
             let [tf, tz, tg] = id.chain_tolerance();
@@ -269,6 +281,69 @@ fn the_printed_tolerance_bounds_the_errors() {
                 let ez = (a.damping_ratio.value / t.damping_ratio - 1.0).abs();
                 assert!(ef <= tf && ez <= tz, "{t:?}: {a:?}");
             }
+/// The MEMS band fitted to the pulses' Hertz shape (`--hertz-pulses`): printed per seed.
+fn mems_band(impacts: usize, seed: u64) -> (f64, f64, f64, f64) {
+    let scene = common::shipped_scene("mems_chain.toml");
+    let stream = generate(&scene, impacts, seed, &StreamOptions::default()).expect("stream");
+    let opts = IdentifyOptions {
+        sample_rate_hz: scene.sensor.sample_rate_hz,
+        modes: Some(3),
+        accelerometer: true,
+        hertz_pulses: true,
+        noise_rms_counts: None,
+    };
+    let t = std::time::Instant::now();
+    let id = identify(&stream.samples, &opts).expect("identified");
+    let band = scene.sensor.accelerometer.expect("band");
+    let a = id.accelerometer.expect("band identified");
+    let ef = a.frequency_hz.value / band.frequency_hz - 1.0;
+    let ez = a.damping_ratio.value / band.damping_ratio - 1.0;
+    let [tf, tz, _] = id.chain_tolerance();
+    assert!(ef.abs() <= tf && ez.abs() <= tz, "tolerance {tf} / {tz}: {ef} {ez}");
+    println!(
+        "{impacts} impacts, seed {seed}: band {:.1} Hz +- {:.1}, zeta {:.4} +- {:.4}: {:+.3} % / {:+.3} % ({} pulses, {:.1} s)",
+        a.frequency_hz.value,
+        a.frequency_hz.std_error,
+        a.damping_ratio.value,
+        a.damping_ratio.std_error,
+        100.0 * ef,
+        100.0 * ez,
+        a.pulses,
+        t.elapsed().as_secs_f64()
+    );
+    (
+        ef,
+        ez,
+        a.frequency_hz.std_error / band.frequency_hz,
+        a.damping_ratio.std_error / band.damping_ratio,
+    )
+}
+
+/// The MEMS band, which rings for too short a time to be identified from its ring, fitted to
+/// the pulses' known Hertz shape (`--hertz-pulses`), five streams of 60 impacts: within 0.6 %
+/// in frequency and damping (measured: -0.17 to -0.36 % and -0.05 to -0.31 %; -0.27 to -0.43 %
+/// and -0.21 to -0.29 % with 120-240 impacts), its jackknife errors within the bounds of an
+/// identified resonance (1 %, 20 %), and both errors within the `chain_tolerance` printed.
+#[test]
+fn mems_band_from_hertz_pulses() {
+    for seed in 1..=5 {
+        let (ef, ez, sf, sz) = mems_band(60, seed);
+        assert!(
+            ef.abs() < 0.006 && ez.abs() < 0.006,
+            "seed {seed}: {ef} {ez}"
+        );
+        assert!(sf < 0.01 && sz < 0.2, "seed {seed}: {sf} {sz}");
+    }
+}
+
+/// The same with 120 and 240 impacts (`cargo test -p host-sim --release --test identify
+/// mems_band_from_more -- --ignored --nocapture`; about two minutes).
+#[test]
+#[ignore]
+fn mems_band_from_more_pulses() {
+    for impacts in [120, 240] {
+        for seed in 1..=3 {
+            mems_band(impacts, seed);
         }
     }
 }
