@@ -9,7 +9,8 @@
 //!   the same detector on exact features, the true labels, a clairvoyant and the naive rule
 //!   (see `host_sim::caving`, `docs/caving.md`);
 //! - `host-sim identify`: the beam's modes and the accelerometer's resonance estimated from a
-//!   recorded stream (see `host_sim::identify`), printed as a `[sensor]` table;
+//!   recorded stream (see `host_sim::identify`; the band from the pulses' Hertz shape with
+//!   `--hertz-pulses`), printed as a `[sensor]` table;
 //! - `host-sim export`: a scene file as Rust source for a firmware (see `host_sim::export`);
 //! - `host-sim plasticity`: elastic against yielding contacts of a scene's classes (see
 //!   `host_sim::plasticity`, `docs/plasticity.md`);
@@ -417,6 +418,7 @@ mod tests {
             "--modes",
             "2",
             "--accelerometer",
+            "--hertz-pulses",
         ])
         .expect("parses");
         let Command::Identify(args) = cli.command else {
@@ -426,6 +428,7 @@ mod tests {
         assert_eq!(o.sample_rate_hz, 26667.0);
         assert_eq!(o.modes, Some(2));
         assert!(o.accelerometer);
+        assert!(o.hertz_pulses);
         assert_eq!(o.noise_rms_counts, None);
     }
 }
