@@ -8,7 +8,7 @@
 //! (`F = <r, d> / <r, r>`, the model is linear in it), `(t_0, t_c)` by Levenberg-Marquardt on
 //! that projected residual (derivatives by forward differences of `10^-3 t_c`). The two shared
 //! parameters are searched by Nelder-Mead in `(ln f_a, ln zeta_a)` from the best point of a
-//! coarse grid (`f_a` from 0.05 to 0.6 `f_s`, `zeta_a` from 0.2 to 1). The jackknife's
+//! coarse grid (`f_a` from 0.06 to 0.4 `f_s`, `zeta_a` from 0.3 to 1). The jackknife's
 //! leave-one-group-out searches start from the full fit.
 
 use rayon::prelude::*;
