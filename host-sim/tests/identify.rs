@@ -281,6 +281,10 @@ fn the_printed_tolerance_bounds_the_errors() {
                 let ez = (a.damping_ratio.value / t.damping_ratio - 1.0).abs();
                 assert!(ef <= tf && ez <= tz, "{t:?}: {a:?}");
             }
+        }
+    }
+}
+
 /// The MEMS band fitted to the pulses' Hertz shape (`--hertz-pulses`): printed per seed.
 fn mems_band(impacts: usize, seed: u64) -> (f64, f64, f64, f64) {
     let scene = common::shipped_scene("mems_chain.toml");
@@ -299,7 +303,10 @@ fn mems_band(impacts: usize, seed: u64) -> (f64, f64, f64, f64) {
     let ef = a.frequency_hz.value / band.frequency_hz - 1.0;
     let ez = a.damping_ratio.value / band.damping_ratio - 1.0;
     let [tf, tz, _] = id.chain_tolerance();
-    assert!(ef.abs() <= tf && ez.abs() <= tz, "tolerance {tf} / {tz}: {ef} {ez}");
+    assert!(
+        ef.abs() <= tf && ez.abs() <= tz,
+        "tolerance {tf} / {tz}: {ef} {ez}"
+    );
     println!(
         "{impacts} impacts, seed {seed}: band {:.1} Hz +- {:.1}, zeta {:.4} +- {:.4}: {:+.3} % / {:+.3} % ({} pulses, {:.1} s)",
         a.frequency_hz.value,
