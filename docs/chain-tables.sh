@@ -68,18 +68,18 @@ for scene in tail_beam mems_chain piezo_chain; do
     for seed in 1 2; do cal_row "$scene --chain-drawn" "scenes/$scene.toml" "$seed" --chain-drawn; done
 done
 
-# Third table: every stream's chain drawn within the `chain_tolerance` that `host-sim identify`
-# prints for a stream of 60 impacts of the scene (seed 1), with `--accelerometer` where the
-# scene has one and `--hertz-pulses` for the MEMS band, which does not ring long enough to be
-# identified from its ring, n N.
-identified_tolerance() { # scene name -> the chain_tolerance line identify prints
+# Third table: every stream's chain drawn within the `chain_tolerance` (and
+# `accelerometer_tolerance`) that `host-sim identify` prints for a stream of 60 impacts of the
+# scene (seed 1), with `--accelerometer` where the scene has one and `--hertz-pulses` for the
+# MEMS band, which does not ring long enough to be identified from its ring, n N.
+identified_tolerance() { # scene name -> the tolerance lines identify prints
     "$bin" stream --scene "scenes/$1.toml" --n 60 --seed 1 --out "$exact/$1_id" > /dev/null
     local fs flags=()
     fs=$(awk -F'[= ]+' '/^sample_rate_hz/ { print $2; exit }' "scenes/$1.toml")
     grep -q '^accelerometer' "scenes/$1.toml" && flags+=(--accelerometer)
     [ "$1" = mems_chain ] && flags+=(--hertz-pulses)
     "$bin" identify --stream "$exact/$1_id.bin" --sample-rate "$fs" "${flags[@]}" |
-        grep '^chain_tolerance' | sed 's/ *#.*//'
+        grep -E '^(chain|accelerometer)_tolerance' | sed 's/ *#.*//'
 }
 id_row() { # label, scene file, seed
     "$bin" evaluate --scene "$2" --n "$n" --seed "$3" --chain-drawn --json | python3 -c '
@@ -99,8 +99,13 @@ for scene in tail_beam mems_chain piezo_chain; do
     tol=$(identified_tolerance "$scene")
     label=$(python3 -c '
 import re, sys
-f, z, g = (100 * float(v) for v in re.findall(r"= ([0-9.e-]+)", sys.argv[1]))
-print("%g %% / %g %% / %g %%" % (f, z, g))' "$tol")
+lines = sys.argv[1].splitlines()
+f, z, g = (100 * float(v) for v in re.findall(r"= ([0-9.e-]+)", lines[0]))
+label = "%g %% / %g %% / %g %%" % (f, z, g)
+if len(lines) > 1:
+    af, az = (100 * float(v) for v in re.findall(r"= ([0-9.e-]+)", lines[1]))
+    label += "; band %g %% / %g %%" % (af, az)
+print(label)' "$tol")
     awk -v tol="$tol" '/^\[sensor\]/ { print; print tol; next } 1' \
         "scenes/$scene.toml" > "$exact/${scene}_identified.toml"
     for seed in 1 2; do

@@ -15,7 +15,9 @@
 //! so the pulse's area `C_AREA F_max t_c` does not move and `d ln t_c = -d ln F_max`.
 //!
 //! Each parameter of each stage (frequency, damping, and a beam mode's gain) is moved by
-//! `+-` its relative tolerance alone, giving the larger `|d ln F_max|` of the two signs, `b_i`.
+//! `+-` its relative tolerance alone (the accelerometer's own, when the chain states one:
+//! [`ChainDynamics::accelerometer_tolerance`]), giving the larger `|d ln F_max|` of the two
+//! signs, `b_i`.
 //! Each parameter's error is taken as uniform within its tolerance and independent of the
 //! others, so the bias has the standard deviation `sqrt(sum_i b_i^2 / 3)` to first order: that
 //! is the figure the classifier adds to the pulse's noise. (The sum of the `b_i`, the worst
@@ -205,8 +207,10 @@ impl ChainBias {
         shortest_s: f32,
         longest_s: f32,
     ) -> Self {
-        let tol = dynamics.tolerance();
-        if dynamics.is_rigid() || tol == ChainTolerance::EXACT {
+        let exact = dynamics.tolerance() == ChainTolerance::EXACT
+            && (dynamics.accelerometer().is_none()
+                || dynamics.accelerometer_tolerance() == ChainTolerance::EXACT);
+        if dynamics.is_rigid() || exact {
             return Self::NONE;
         }
         let (l0, l1) = (M::ln(shortest_s), M::ln(longest_s.max(shortest_s)));
@@ -289,7 +293,7 @@ fn mv(k: usize, tol: ChainTolerance) -> (f32, f32, f32) {
 // Not inlined: a rigid scene's build never calls it and must not carry its frame.
 #[inline(never)]
 fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
-    let tol = d.tolerance();
+    let (tol, acc_tol) = (d.tolerance(), d.accelerometer_tolerance());
     let v_top = (core::f32::consts::PI * sample_rate_hz * t_c).min(MAX_V);
     // [stage][move]: modes, then the accelerometer.
     let mut sums = [[0.0f32; MOVES]; crate::equaliser::MAX_MODES + 1];
@@ -325,7 +329,7 @@ fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
         if let (Some(a), Some(row)) = (d.accelerometer(), sums.last_mut()) {
             let t = accelerometer_term(s, &a);
             for (j, sum) in row.iter_mut().enumerate().take(4) {
-                let (df, dz, _) = mv(j, tol);
+                let (df, dz, _) = mv(j, acc_tol);
                 let moved = Accelerometer {
                     frequency_hz: a.frequency_hz * (1.0 + df),
                     damping_ratio: a.damping_ratio * (1.0 + dz),

@@ -154,6 +154,8 @@ pub struct ChainDynamics {
     mode_count: u8,
     accelerometer: Option<Accelerometer>,
     tolerance: ChainTolerance,
+    /// The accelerometer's own tolerance, when it is known better or worse than the beam's.
+    accelerometer_tolerance: Option<ChainTolerance>,
     /// The equaliser and the sample rate (Hz) it was designed at.
     design: Option<(f32, EqualiserDesign)>,
     /// What computes the bias the equaliser leaves in short pulses (set with the design by
@@ -197,6 +199,7 @@ impl ChainDynamics {
         mode_count: 0,
         accelerometer: None,
         tolerance: ChainTolerance::IDENTIFIED,
+        accelerometer_tolerance: None,
         design: None,
         residual: None,
     };
@@ -234,6 +237,42 @@ impl ChainDynamics {
     /// How well the parameters are known.
     pub fn tolerance(&self) -> ChainTolerance {
         self.tolerance
+    }
+
+    /// States how well the accelerometer's frequency and damping ratio are known, apart from
+    /// the beam modes' (its `gain` is not used: the accelerometer has unit gain at DC); a band
+    /// fitted to the pulses can be known far better than the modes' damping. Unset, the
+    /// chain's [`ChainDynamics::tolerance`] holds for it. [`Error::OutOfRange`] or
+    /// [`Error::NonFinite`] outside `[0, 0.5)`.
+    ///
+    /// ```
+    /// use coalshock::{Accelerometer, ChainDynamics, ChainTolerance};
+    /// let band = Accelerometer { frequency_hz: 6300.0, damping_ratio: 0.7 };
+    /// let known = ChainTolerance { frequency: 0.005, damping: 0.01, gain: 0.0 };
+    /// let d = ChainDynamics::RIGID.with_accelerometer(band);
+    /// assert_eq!(d.accelerometer_tolerance(), ChainTolerance::IDENTIFIED);
+    /// let d = d.with_accelerometer_tolerance(known).unwrap();
+    /// assert_eq!(d.accelerometer_tolerance(), known);
+    /// assert_eq!(d.tolerance(), ChainTolerance::IDENTIFIED);
+    /// ```
+    pub fn with_accelerometer_tolerance(
+        mut self,
+        tolerance: ChainTolerance,
+    ) -> Result<Self, Error> {
+        tolerance.check()?;
+        self.accelerometer_tolerance = Some(tolerance);
+        Ok(self)
+    }
+
+    /// How well the accelerometer's parameters are known: its own tolerance if stated, else
+    /// the chain's.
+    pub fn accelerometer_tolerance(&self) -> ChainTolerance {
+        self.accelerometer_tolerance.unwrap_or(self.tolerance)
+    }
+
+    /// `true` when the accelerometer's tolerance was stated apart from the chain's.
+    pub fn has_accelerometer_tolerance(&self) -> bool {
+        self.accelerometer_tolerance.is_some()
     }
 
     /// The accelerometer resonance, if modelled.

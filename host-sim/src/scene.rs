@@ -652,6 +652,18 @@ pub struct ChainToleranceSpec {
     pub gain: f64,
 }
 
+/// How well the kernel knows the accelerometer's band apart from the beam
+/// (`[sensor] accelerometer_tolerance`): the largest relative error of its frequency and
+/// damping ratio, each in `[0, 0.5)`. Unset: the chain's `chain_tolerance` holds for it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AccelerometerToleranceSpec {
+    /// Relative error of its frequency.
+    pub frequency: f64,
+    /// Relative error of its damping ratio.
+    pub damping: f64,
+}
+
 /// The sensor chain (`[sensor]`): contact force -> beam -> accelerometer -> sampling -> noise
 /// -> offset and drift -> ADC (see `sim::sensor`, the layer above).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -685,6 +697,9 @@ pub struct SensorSpec {
     /// How well the kernel knows the accelerometer and the beam modes (unset: 2 %, 30 %, 20 %).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chain_tolerance: Option<ChainToleranceSpec>,
+    /// How well the kernel knows the accelerometer apart from the modes (unset: as the chain).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub accelerometer_tolerance: Option<AccelerometerToleranceSpec>,
 }
 
 fn default_oversample() -> u32 {
@@ -712,6 +727,7 @@ impl SensorSpec {
             accelerometer: None,
             beam_modes: Vec::new(),
             chain_tolerance: None,
+            accelerometer_tolerance: None,
         }
     }
 
@@ -771,18 +787,32 @@ impl SensorSpec {
             )?;
             finite(&format!("sensor.beam_modes[{i}].gain"), m.gain)?;
         }
+        let mut tolerances = Vec::new();
         if let Some(t) = &self.chain_tolerance {
-            for (name, v) in [
+            tolerances.extend([
                 ("sensor.chain_tolerance.frequency", t.frequency),
                 ("sensor.chain_tolerance.damping", t.damping),
                 ("sensor.chain_tolerance.gain", t.gain),
-            ] {
-                if !(v.is_finite() && (0.0..0.5).contains(&v)) {
-                    return Err(SceneError::invalid(
-                        name,
-                        format!("must be a relative error in [0, 0.5) (got {v})"),
-                    ));
-                }
+            ]);
+        }
+        if let Some(t) = &self.accelerometer_tolerance {
+            if self.accelerometer.is_none() {
+                return Err(SceneError::invalid(
+                    "sensor.accelerometer_tolerance",
+                    "is set but the chain has no accelerometer stage",
+                ));
+            }
+            tolerances.extend([
+                ("sensor.accelerometer_tolerance.frequency", t.frequency),
+                ("sensor.accelerometer_tolerance.damping", t.damping),
+            ]);
+        }
+        for (name, v) in tolerances {
+            if !(v.is_finite() && (0.0..0.5).contains(&v)) {
+                return Err(SceneError::invalid(
+                    name,
+                    format!("must be a relative error in [0, 0.5) (got {v})"),
+                ));
             }
         }
         Ok(())

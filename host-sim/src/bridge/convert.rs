@@ -153,6 +153,15 @@ pub fn dynamics_to_kernel(s: &SensorSpec) -> Result<ChainDynamics, ConvertError>
             })
             .map_err(ConvertError::Kernel)?;
     }
+    if let Some(t) = &s.accelerometer_tolerance {
+        dynamics = dynamics
+            .with_accelerometer_tolerance(ChainTolerance {
+                frequency: t.frequency as f32,
+                damping: t.damping as f32,
+                gain: 0.0,
+            })
+            .map_err(ConvertError::Kernel)?;
+    }
     Ok(dynamics)
 }
 

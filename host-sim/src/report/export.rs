@@ -419,7 +419,9 @@ fn imports(out: &mut String, settings: &Settings, dynamics: &ChainDynamics, tabl
         if dynamics.accelerometer().is_some() {
             uses.push("Accelerometer");
         }
-        if dynamics.tolerance() != ChainTolerance::IDENTIFIED {
+        if dynamics.tolerance() != ChainTolerance::IDENTIFIED
+            || dynamics.has_accelerometer_tolerance()
+        {
             uses.push("ChainTolerance");
         }
     }
@@ -503,19 +505,31 @@ fn sensor_chain(out: &mut String, s: &SensorSpec, dynamics: &ChainDynamics) {
     }
     let t = dynamics.tolerance();
     if t != ChainTolerance::IDENTIFIED {
-        let _ = write!(
+        write_tolerance(out, "with_tolerance", t);
+    }
+    if dynamics.has_accelerometer_tolerance() {
+        write_tolerance(
             out,
-            "\n        .with_tolerance(ChainTolerance {{\n            \
-                 frequency: {},\n            \
-                 damping: {},\n            \
-                 gain: {},\n        \
-             }})?",
-            lit(t.frequency),
-            lit(t.damping),
-            lit(t.gain),
+            "with_accelerometer_tolerance",
+            dynamics.accelerometer_tolerance(),
         );
     }
     out.push_str(";\n    let sensor = sensor.with_dynamics_in::<M>(dynamics)?;\n");
+}
+
+/// `.METHOD(ChainTolerance { .. })?` on the dynamics being written.
+fn write_tolerance(out: &mut String, method: &str, t: ChainTolerance) {
+    let _ = write!(
+        out,
+        "\n        .{method}(ChainTolerance {{\n            \
+             frequency: {},\n            \
+             damping: {},\n            \
+             gain: {},\n        \
+         }})?",
+        lit(t.frequency),
+        lit(t.damping),
+        lit(t.gain),
+    );
 }
 
 #[cfg(test)]

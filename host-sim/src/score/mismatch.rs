@@ -30,13 +30,14 @@ impl ChainMismatch {
     /// The scene with its chain as the kernel is told it (the simulation keeps the true one).
     pub fn applied_to(&self, scene: &SceneFile) -> SceneFile {
         let errors = [self.frequency, self.damping, self.gain];
-        scaled_chain(scene, |parameter| 1.0 + errors[parameter])
+        scaled_chain(scene, |parameter| 1.0 + errors[parameter % 3])
     }
 }
 
 /// The scene with every stage's chain parameter multiplied by `factor(p)`, `p` the parameter's
-/// index in `[frequency, damping, gain]`; called mode by mode (frequency, damping, gain), then
-/// for the accelerometer (frequency, damping).
+/// index in `[frequency, damping, gain]` for a beam mode and `3 + p` (`p` 0 or 1) for the
+/// accelerometer; called mode by mode (frequency, damping, gain), then for the accelerometer
+/// (frequency, damping).
 fn scaled_chain(scene: &SceneFile, mut factor: impl FnMut(usize) -> f64) -> SceneFile {
     let mut s = scene.clone();
     for m in &mut s.sensor.beam_modes {
@@ -45,8 +46,8 @@ fn scaled_chain(scene: &SceneFile, mut factor: impl FnMut(usize) -> f64) -> Scen
         m.gain *= factor(2);
     }
     if let Some(a) = &mut s.sensor.accelerometer {
-        a.frequency_hz *= factor(0);
-        a.damping_ratio *= factor(1);
+        a.frequency_hz *= factor(3);
+        a.damping_ratio *= factor(4);
     }
     s
 }
@@ -63,12 +64,27 @@ pub fn chain_tolerance(scene: &SceneFile) -> [f64; 3] {
     }
 }
 
+/// The accelerometer's tolerance, `[frequency, damping]` relative: the scene's
+/// `accelerometer_tolerance`, else the chain's ([`chain_tolerance`]).
+pub fn accelerometer_tolerance(scene: &SceneFile) -> [f64; 2] {
+    match &scene.sensor.accelerometer_tolerance {
+        Some(t) => [t.frequency, t.damping],
+        None => {
+            let [f, z, _] = chain_tolerance(scene);
+            [f, z]
+        }
+    }
+}
+
 /// The scene with its chain as one node might have identified it: every stage's frequency,
 /// damping ratio and (beam modes) gain multiplied by `1 + e`, each `e` drawn independently and
-/// uniformly in `+-` its [`chain_tolerance`] from a ChaCha8 generator seeded with `seed`
-/// (the errors the kernel's widening takes as its noise: `coalshock::chain_bias`).
+/// uniformly in `+-` its tolerance ([`chain_tolerance`], and [`accelerometer_tolerance`] for
+/// the accelerometer) from a ChaCha8 generator seeded with `seed` (the errors the kernel's
+/// widening takes as its noise: `coalshock::chain_bias`).
 pub fn drawn_chain(scene: &SceneFile, seed: u64) -> SceneFile {
-    let tolerance = chain_tolerance(scene);
+    let [f, z, g] = chain_tolerance(scene);
+    let [af, az] = accelerometer_tolerance(scene);
+    let tolerance = [f, z, g, af, az];
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     scaled_chain(scene, |parameter| {
         1.0 + tolerance[parameter] * (2.0 * rng.random::<f64>() - 1.0)

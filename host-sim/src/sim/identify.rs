@@ -1317,10 +1317,21 @@ pub const TOLERANCE_SIGMAS: f64 = 3.0;
 /// of about 1.5 % (a gap of 2-10 ms covers a third to two of its periods).
 pub const TOLERANCE_FLOOR: [f64; 3] = [2e-3, 0.15, 0.05];
 
-/// The smallest relative tolerance stated for the frequency of a band fitted to the Hertz
-/// pulses (`--hertz-pulses`): it comes out 0.17-0.43 % low on host-sim's MEMS streams at 60-240
-/// impacts, a bias that more pulses do not reduce and the jackknife does not see.
-pub const BAND_FIT_FREQUENCY_FLOOR: f64 = 5e-3;
+/// The smallest relative tolerance stated for `[frequency, damping]` of a band fitted to the
+/// Hertz pulses (`--hertz-pulses`): on host-sim's MEMS streams at 60-240 impacts it comes out
+/// 0.17-0.43 % low in frequency and 0.05-0.31 % in damping, a bias that more pulses do not
+/// reduce and the jackknife does not see.
+pub const BAND_FIT_FLOOR: [f64; 2] = [5e-3, 1e-2];
+
+/// The smallest relative tolerance stated for `[frequency, damping]` of a resonance found from
+/// its ring: within 0.03 % and 2.2 % on host-sim's streams (40 kHz, zeta 0.05; 35 kHz, zeta
+/// 0.02), with a margin.
+pub const RING_FLOOR: [f64; 2] = [2e-3, 0.05];
+
+/// [`TOLERANCE_SIGMAS`] standard errors of `e`, relative to its value.
+fn relative_bound(e: Estimate) -> f64 {
+    TOLERANCE_SIGMAS * e.std_error / e.value.abs()
+}
 
 /// `x` rounded up to two significant digits (within a millionth of a digit counts as on it, so that a
 /// value converted from f32 stays put).
@@ -1376,37 +1387,43 @@ impl Identification {
         s
     }
 
-    /// The scene's `chain_tolerance` this identification supports, `[frequency, damping,
-    /// gain]` (relative): for each, the largest [`TOLERANCE_SIGMAS`] `sigma / |value|` over the
-    /// identified beam modes and resonance (a resonance has no gain), at least
-    /// [`TOLERANCE_FLOOR`], rounded up to two digits. A resonance asked for and not identified
-    /// keeps the datasheet's value, known to the kernel's default damping tolerance
-    /// (`ChainTolerance::IDENTIFIED`, 30 %).
+    /// The scene's `chain_tolerance` this identification supports for the beam modes,
+    /// `[frequency, damping, gain]` (relative): for each, the largest [`TOLERANCE_SIGMAS`]
+    /// `sigma / |value|` over the identified modes, at least [`TOLERANCE_FLOOR`], rounded up to
+    /// two digits.
     pub fn chain_tolerance(&self) -> [f64; 3] {
-        let relative = |e: Estimate| TOLERANCE_SIGMAS * e.std_error / e.value.abs();
         let mut t = TOLERANCE_FLOOR;
-        let stages = self
-            .modes
-            .iter()
-            .map(|m| [m.frequency_hz, m.damping_ratio, m.gain]);
-        for [f, z, g] in stages {
-            t = [
-                t[0].max(relative(f)),
-                t[1].max(relative(z)),
-                t[2].max(relative(g)),
-            ];
-        }
-        if let Some(a) = &self.accelerometer {
-            let floor = match a.source {
-                ResonanceSource::Ring => 0.0,
-                ResonanceSource::HertzPulses => BAND_FIT_FREQUENCY_FLOOR,
-            };
-            t[0] = t[0].max(relative(a.frequency_hz)).max(floor);
-            t[1] = t[1].max(relative(a.damping_ratio));
-        } else if self.accelerometer_asked {
-            t[1] = t[1].max(f64::from(coalshock::ChainTolerance::IDENTIFIED.damping));
+        for m in &self.modes {
+            let moved = [m.frequency_hz, m.damping_ratio, m.gain].map(relative_bound);
+            t = [t[0].max(moved[0]), t[1].max(moved[1]), t[2].max(moved[2])];
         }
         t.map(round_up_2)
+    }
+
+    /// The scene's `accelerometer_tolerance` this identification supports, `[frequency,
+    /// damping]` (relative), when the resonance was asked for: identified, the larger of
+    /// [`TOLERANCE_SIGMAS`] standard errors and its method's floor ([`RING_FLOOR`],
+    /// [`BAND_FIT_FLOOR`]); not identified, the kernel's default (`ChainTolerance::IDENTIFIED`,
+    /// 2 % and 30 %), for the datasheet's value that stays.
+    pub fn accelerometer_tolerance(&self) -> Option<[f64; 2]> {
+        if !self.accelerometer_asked {
+            return None;
+        }
+        let t = match &self.accelerometer {
+            Some(a) => {
+                let floor = match a.source {
+                    ResonanceSource::Ring => RING_FLOOR,
+                    ResonanceSource::HertzPulses => BAND_FIT_FLOOR,
+                };
+                let moved = [a.frequency_hz, a.damping_ratio].map(relative_bound);
+                [moved[0].max(floor[0]), moved[1].max(floor[1])]
+            }
+            None => {
+                let d = coalshock::ChainTolerance::IDENTIFIED;
+                [d.frequency, d.damping].map(f64::from)
+            }
+        };
+        Some(t.map(round_up_2))
     }
 
     /// The `[sensor]` table (identified entries only), with standard errors as comments.
@@ -1420,23 +1437,32 @@ impl Identification {
         ));
         let [f, z, g] = self.chain_tolerance();
         s.push_str(&format!(
-            "chain_tolerance = {{ frequency = {f}, damping = {z}, gain = {g} }}  # the larger of \
-             {} standard errors and the errors on simulated streams\n",
+            "chain_tolerance = {{ frequency = {f}, damping = {z}, gain = {g} }}  # the modes: the \
+             larger of {} standard errors and the errors on simulated streams\n",
             TOLERANCE_SIGMAS
         ));
+        if let Some([f, z]) = self.accelerometer_tolerance() {
+            let why = if self.accelerometer.is_some() {
+                "the same for the accelerometer"
+            } else {
+                "not identified: the kernel's default"
+            };
+            s.push_str(&format!(
+                "accelerometer_tolerance = {{ frequency = {f}, damping = {z} }}  # {why}\n"
+            ));
+        }
         if self.hertz_pulses_asked && self.accelerometer.is_none() {
             s.push_str(
                 "# accelerometer: not identified: the band fitted to the Hertz pulses scatters \
                  between groups beyond\n# 1 % in frequency or 20 % in damping. Keep the \
-                 datasheet's value; chain_tolerance's damping is the default's, 0.3, for it.\n",
+                 datasheet's value.\n",
             );
         } else if self.accelerometer_asked && self.accelerometer.is_none() {
             s.push_str(
                 "# accelerometer: not identified: no resonance rings after the pulses \
                  consistently (none, one above the\n# Nyquist frequency, or one damped so \
                  heavily that it rings for a sample or two, as a MEMS part's\n# band at zeta \
-                 0.7 does at 26.7 kS/s). Keep the datasheet's value; chain_tolerance's\n# damping \
-                 is the default's, 0.3, for it.\n",
+                 0.7 does at 26.7 kS/s). Keep the datasheet's value.\n",
             );
         }
         if let Some(a) = &self.accelerometer {
