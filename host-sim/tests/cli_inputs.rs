@@ -301,3 +301,29 @@ fn a_stream_must_be_as_long_as_its_truth_says() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `[sensor] accelerometer_tolerance` is refused without an accelerometer stage and outside
+/// `[0, 0.5)`, by its field's name.
+#[test]
+fn an_accelerometer_tolerance_needs_an_accelerometer_and_a_relative_error() {
+    let sensor = "[sensor]\n";
+    let without = paper_with(
+        sensor,
+        "[sensor]\naccelerometer_tolerance = { frequency = 0.005, damping = 0.01 }\n",
+    );
+    scene_refused(
+        "no-band",
+        &without,
+        &["sensor.accelerometer_tolerance", "no accelerometer stage"],
+    );
+    let band = "[sensor]\naccelerometer = { frequency_hz = 40000.0, damping_ratio = 0.05 }\n";
+    let too_wide = paper_with(
+        sensor,
+        &format!("{band}accelerometer_tolerance = {{ frequency = 0.005, damping = 0.7 }}\n"),
+    );
+    scene_refused(
+        "too-wide",
+        &too_wide,
+        &["sensor.accelerometer_tolerance.damping", "[0, 0.5)", "0.7"],
+    );
+}
