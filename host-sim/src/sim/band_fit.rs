@@ -1,15 +1,16 @@
-//! Fits the accelerometer band's frequency and damping ratio to the beam-inverted pulses of a
-//! stream whose contact is undamped Hertz (`host-sim identify --hertz-pulses`).
+//! Fits the accelerometer band's frequency and damping ratio to the pulses of a stream whose
+//! contact is undamped Hertz (`host-sim identify --hertz-pulses`).
 //!
-//! Each pulse `k` (samples `d_kn`, counts, the beam stage inverted: `A u`) is modelled as
-//! `F_k r_n(t_0k, t_ck; f_a, zeta_a)`, `r` the unit Hertz pulse through the band
-//! ([`crate::sim::band_response`]). The cost `S(f_a, zeta_a) = sum_k min_(F, t_0, t_c) sum_n
-//! (d_kn - F r_n)^2` (counts^2) profiles the pulse's own parameters out: `F` in closed form
-//! (`F = <r, d> / <r, r>`, the model is linear in it), `(t_0, t_c)` by Levenberg-Marquardt on
-//! that projected residual (derivatives by forward differences of `10^-3 t_c`). The two shared
-//! parameters are searched by Nelder-Mead in `(ln f_a, ln zeta_a)` from the best point of a
-//! coarse grid (`f_a` from 0.06 to 0.4 `f_s`, `zeta_a` from 0.3 to 1). The jackknife's
-//! leave-one-group-out searches start from the full fit.
+//! Each pulse `k` (samples `d_kn`, counts, with the ring of the impacts before it removed) is
+//! modelled as `F_k r_n(t_0k, t_ck; f_a, zeta_a)`, `r` the unit Hertz pulse through the whole
+//! chain, the identified beam modes and the band ([`crate::sim::hertz_response`]). The cost
+//! `S(f_a, zeta_a) = sum_k min_(F, t_0, t_c) sum_n (d_kn - F r_n)^2` (counts^2) profiles the
+//! pulse's own parameters out: `F` in closed form (`F = <r, d> / <r, r>`, the model is linear
+//! in it), `(t_0, t_c)` by Levenberg-Marquardt on that projected residual (derivatives by
+//! forward differences of `10^-3 t_c`). The two shared parameters are searched by Nelder-Mead
+//! in `(ln f_a, ln zeta_a)` from the best point of a coarse grid (`f_a` from 0.06 to 0.4
+//! `f_s`, `zeta_a` from 0.3 to 1). The jackknife's leave-one-group-out searches start from the
+//! full fit.
 
 use rayon::prelude::*;
 
@@ -36,8 +37,8 @@ const SEARCH_TOLERANCE: f64 = 1e-5;
 pub struct BandPulse {
     /// Its jackknife group.
     pub group: usize,
-    /// The beam-inverted samples `A u` (counts) from a few samples before the onset to the
-    /// free window after the pulse.
+    /// The samples with the earlier ring removed (counts), from a few samples before the onset
+    /// to the free window after the pulse.
     pub samples: Vec<f64>,
 }
 

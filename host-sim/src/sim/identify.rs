@@ -958,7 +958,7 @@ impl Rings<'_> {
 }
 
 impl Rings<'_> {
-    /// Step 4b of the module docs: the band fitted to the beam-inverted pulses that are not
+    /// Step 4b of the module docs: the band fitted to the pulses (earlier ring removed) that are not
     /// clipped (no sample on a rail of `samples`, [`rails`]), identified only within the
     /// jackknife bounds of step 4.
     fn band_from_pulses(&self, samples: &[i16], modes: &[BeamMode]) -> Option<ResonanceEstimate> {
