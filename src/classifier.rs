@@ -371,6 +371,46 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         }
     }
 
+    /// Where class `class` puts a measured pulse, and on what noise the classifier weighs it
+    /// there: the Hertz-equivalent measurement ([`Scene::hertz_equivalent`]) inverted through
+    /// the class's envelope to `(x, y) = (ln R, ln u)` (R in m, u in m/s), with the standard
+    /// deviations of `x` and `y` widened by the chain's bias at the pulse's duration, exactly
+    /// as [`Scene::classify`] weighs the class. A host that knows the impact's true radius and
+    /// speed can check the stated noise: `(x - ln R) / sigma_x` and `(y - ln u) / sigma_y`
+    /// should be standard normal. `None` for a class past the scene's or a measurement
+    /// `classify` rejects as implausible.
+    ///
+    /// ```
+    /// use coalshock::{Measurement, Scene};
+    /// let scene: Scene = Scene::paper().unwrap();
+    /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
+    ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
+    ///                       cov_ln: -1e-4, asymmetry: 0.0 };
+    /// let (x, y, noise) = scene.located(0, &m).unwrap();
+    /// let inv = scene.invert(0, &m).unwrap();
+    /// assert!((x.exp() / inv.radius_m - 1.0).abs() < 1e-5);
+    /// assert!((y.exp() / inv.speed_m_s - 1.0).abs() < 1e-5);
+    /// assert!(noise.sigma_x > 0.0 && noise.sigma_y > 0.0);
+    /// assert!(scene.located(9, &m).is_none());
+    /// ```
+    pub fn located(&self, class: u8, m: &Measurement) -> Option<(f32, f32, NoiseXy)> {
+        let ok = |v: f32| v.is_finite() && v > 0.0;
+        if !ok(m.peak_force_n) || !ok(m.duration_s) {
+            return None;
+        }
+        let h = self.hertz_equivalent(m);
+        if !ok(h.peak_force_n) || !ok(h.duration_s) {
+            return None;
+        }
+        let env = self.envelopes().get(class as usize)?;
+        let p = self.pulse_point(&h);
+        let (_, wide) = env
+            .bent_noise::<M>((p.lf, p.lt), (p.sf, p.st, p.cov), p.bias)
+            .unwrap_or((p.noise, p.wide));
+        let (x, y) = env.invert_ln(p.lf, p.lt);
+        Some((x, y, wide))
+    }
+
     /// The radius and speed class `class` would need for the measured pulse (after
     /// [`Scene::hertz_equivalent`]).
     pub fn invert(&self, class: u8, m: &Measurement) -> Option<Inverted> {
