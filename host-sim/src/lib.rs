@@ -35,7 +35,7 @@ pub use physics::{
 };
 pub use report::{export, impact_row, paper, plasticity, speed, tradeoff};
 pub use score::{
-    bayes, caving, counts, crb, cusum, evaluate, mismatch, reference, reliability, replay,
-    saturation, study_error, yield_bayes,
+    bayes, caving, counts, crb, cusum, evaluate, mismatch, noise_check, reference, reliability,
+    replay, saturation, study_error, yield_bayes,
 };
 pub use sim::{generate, identify, par, sensor, stream, stream_file};

@@ -9,6 +9,7 @@ pub mod crb;
 pub mod cusum;
 pub mod evaluate;
 pub mod mismatch;
+pub mod noise_check;
 pub mod reference;
 pub mod reliability;
 pub mod replay;

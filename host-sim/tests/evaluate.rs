@@ -10,6 +10,9 @@
 //!   Bayes decision on its own measurements at most 1 point plus 3 standard errors; the
 //!   stated posteriors within 3 points plus 3 standard errors of the observed accuracy in
 //!   every bin of at least 200 verdicts;
+//!   and the noise the classifier weighs each pulse on holds against the truth (`z` of
+//!   `ln R` and `ln u` standard normal within 10 % in root mean square and 0.5 pp plus 4
+//!   binomial standard errors in its tails beyond 1, 2 and 3);
 //! - the oracle (noise-free) is at least the Bayes limit with noise, less 3 standard errors;
 //! - a confident-error rate out of (0, 0.5) is refused, and a looser one decides more;
 //! - every impact lands in exactly one cell of its row; one seed gives one result;
@@ -19,6 +22,7 @@ use coalshock::math::{DefaultBackend, Libm};
 use host_sim::evaluate::{EvalError, EvalOptions, Evaluation, evaluate};
 use host_sim::generate::{generate_class, generate_classes};
 use host_sim::kernel_scene::scene_to_kernel;
+use host_sim::noise_check::NORMAL_BEYOND;
 use host_sim::reference::ReferenceOptions;
 use host_sim::scene::{self, SceneFile};
 use host_sim::stream::StreamOptions;
@@ -167,6 +171,23 @@ fn paper_scene_is_near_the_bayes_limit() {
     // Overlap is reported, not guessed: confident errors stay rare.
     assert!(e.confident_error_rate <= 0.02, "{}", e.confident_error_rate);
     assert!(e.ambiguous_share > 0.1, "{}", e.ambiguous_share);
+    check_stated_noise(&e);
+}
+
+/// On a rigid chain the noise the classifier weighs each pulse on holds against the impacts'
+/// true radius and speed: `z` is standard normal, its root mean square within 10 % of 1 and
+/// each tail share within 4 binomial standard errors of the normal's (erfc, `NORMAL_BEYOND`)
+/// plus 0.5 pp.
+fn check_stated_noise(e: &Evaluation) {
+    let c = &e.noise.stated_noise_check;
+    assert!(c.pulses >= 1900, "{c:?}");
+    for z in [c.ln_radius, c.ln_speed] {
+        assert!((z.rms - 1.0).abs() < 0.1, "{c:?}");
+        for (got, want) in z.beyond.iter().zip(NORMAL_BEYOND) {
+            let se = (want * (1.0 - want) / c.pulses as f64).sqrt();
+            assert!((got - want).abs() <= 0.005 + 4.0 * se, "{c:?}");
+        }
+    }
 }
 
 #[test]

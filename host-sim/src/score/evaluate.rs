@@ -102,6 +102,7 @@ use crate::scene::SceneFile;
 pub use crate::score::bayes::class_models;
 use crate::score::bayes::{Accuracy, ClassModel, FeatureNoise, bayes_accuracy, decide};
 use crate::score::mismatch::{ChainMismatch, drawn_chain};
+use crate::score::noise_check::StatedNoiseCheck;
 use crate::score::reference::{ReferenceLimit, ReferenceOptions, reference_limit};
 use crate::score::reliability::{Reliability, reliability};
 use crate::score::replay::{match_truth, replay_events};
@@ -291,6 +292,9 @@ pub struct NoiseEstimate {
     pub kernel_sigma_ln_force: f64,
     /// Mean of the kernel's own `sigma_ln_duration` over the measured pulses.
     pub kernel_sigma_ln_duration: f64,
+    /// The noise the classifier weighed each measured pulse on, against the pulse's true
+    /// radius and speed ([`StatedNoiseCheck`]).
+    pub stated_noise_check: StatedNoiseCheck,
 }
 
 impl NoiseEstimate {
@@ -517,6 +521,9 @@ struct Outcome {
     /// The posterior the kernel stated for its best class (`Class` and `Ambiguous`).
     posterior: Option<f64>,
     oracle: usize,
+    /// The measurement's error in the true class's `(ln R, ln u)` over the sigmas the
+    /// classifier weighed it on ([`crate::score::noise_check`]).
+    z: Option<(f64, f64)>,
 }
 
 /// A kernel measurement in logs, with the kernel's own standard deviations.
@@ -1024,7 +1031,11 @@ fn run_stream<const N: usize, M: Backend + Send + Sync>(
     let mut rejected = Vec::new();
     for (t, rep) in stream.truth.iter().zip(report_of) {
         let report = rep.map(|i| &reports[i]);
-        outcomes.push(outcome_of(models, t.class, t, report, &mut rejected));
+        let mut o = outcome_of(models, t.class, t, report, &mut rejected);
+        o.z = report
+            .and_then(|r| r.measurement)
+            .and_then(|m| located_z(kernel_scene, t, &m));
+        outcomes.push(o);
     }
     Ok(ChunkResult {
         impacts: classes.len(),
@@ -1061,6 +1072,7 @@ fn outcome_of(
         forced: None,
         posterior: None,
         oracle,
+        z: None,
     };
     if let Some(r) = report {
         o.forced = r.verdict.forced_choice().map(usize::from);
@@ -1090,6 +1102,20 @@ fn outcome_of(
         });
     }
     o
+}
+
+/// Impact `t`'s measurement `m` located in its true class's `(ln R, ln u)`
+/// (`coalshock::Scene::located`), its errors over the sigmas the classifier weighed it on.
+fn located_z<const N: usize, M: Backend>(
+    scene: &coalshock::Scene<N, M>,
+    t: &Truth,
+    m: &coalshock::Measurement,
+) -> Option<(f64, f64)> {
+    let (x, y, noise) = scene.located(u8::try_from(t.class).ok()?, m)?;
+    Some((
+        (x as f64 - t.radius_m.ln()) / noise.sigma_x as f64,
+        (y as f64 - t.speed_m_s.ln()) / noise.sigma_y as f64,
+    ))
 }
 
 /// `a / b`, 0 when `b = 0`.
@@ -1136,6 +1162,7 @@ fn estimate_noise(outcomes: &[Outcome], col_rej: usize) -> NoiseEstimate {
         ),
         kernel_sigma_ln_force: mean(&|m| m.sigma_ln_force),
         kernel_sigma_ln_duration: mean(&|m| m.sigma_ln_duration),
+        stated_noise_check: StatedNoiseCheck::of(measured.iter().filter_map(|(o, _)| o.z)),
     }
 }
 
@@ -1282,6 +1309,7 @@ impl Evaluation {
             "  the kernel's own sigma: F {:.4}, t_c {:.4} (mean over its measurements)",
             n.kernel_sigma_ln_force, n.kernel_sigma_ln_duration
         );
+        let _ = write!(s, "\n{}", n.stated_noise_check.text());
     }
 
     /// The f64 diagnostics at the kernel's measured noise.
