@@ -29,25 +29,49 @@ impl ChainMismatch {
 
     /// The scene with its chain as the kernel is told it (the simulation keeps the true one).
     pub fn applied_to(&self, scene: &SceneFile) -> SceneFile {
-        let errors = [self.frequency, self.damping, self.gain];
-        scaled_chain(scene, |parameter| 1.0 + errors[parameter % 3])
+        scaled_chain(scene, |_, parameter| {
+            1.0 + match parameter {
+                Parameter::Frequency => self.frequency,
+                Parameter::Damping => self.damping,
+                Parameter::Gain => self.gain,
+            }
+        })
     }
 }
 
-/// The scene with every stage's chain parameter multiplied by `factor(p)`, `p` the parameter's
-/// index in `[frequency, damping, gain]` for a beam mode and `3 + p` (`p` 0 or 1) for the
-/// accelerometer; called mode by mode (frequency, damping, gain), then for the accelerometer
-/// (frequency, damping).
-fn scaled_chain(scene: &SceneFile, mut factor: impl FnMut(usize) -> f64) -> SceneFile {
+/// A stage of the sensor chain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stage {
+    /// One of the tail beam's modes.
+    BeamMode,
+    /// The accelerometer's resonance.
+    Accelerometer,
+}
+
+/// A parameter of a stage (the accelerometer has no gain).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Parameter {
+    /// Natural frequency.
+    Frequency,
+    /// Damping ratio.
+    Damping,
+    /// Gain (beam modes only).
+    Gain,
+}
+
+/// The scene with every stage's chain parameter multiplied by `factor(stage, parameter)`;
+/// called mode by mode (frequency, damping, gain), then for the accelerometer (frequency,
+/// damping).
+fn scaled_chain(scene: &SceneFile, mut factor: impl FnMut(Stage, Parameter) -> f64) -> SceneFile {
     let mut s = scene.clone();
     for m in &mut s.sensor.beam_modes {
-        m.frequency_hz *= factor(0);
-        m.damping_ratio *= factor(1);
-        m.gain *= factor(2);
+        m.frequency_hz *= factor(Stage::BeamMode, Parameter::Frequency);
+        m.damping_ratio *= factor(Stage::BeamMode, Parameter::Damping);
+        m.gain *= factor(Stage::BeamMode, Parameter::Gain);
     }
     if let Some(a) = &mut s.sensor.accelerometer {
-        a.frequency_hz *= factor(3);
-        a.damping_ratio *= factor(4);
+        a.frequency_hz *= factor(Stage::Accelerometer, Parameter::Frequency);
+        a.damping_ratio *= factor(Stage::Accelerometer, Parameter::Damping);
     }
     s
 }
@@ -84,10 +108,16 @@ pub fn accelerometer_tolerance(scene: &SceneFile) -> [f64; 2] {
 pub fn drawn_chain(scene: &SceneFile, seed: u64) -> SceneFile {
     let [f, z, g] = chain_tolerance(scene);
     let [af, az] = accelerometer_tolerance(scene);
-    let tolerance = [f, z, g, af, az];
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    scaled_chain(scene, |parameter| {
-        1.0 + tolerance[parameter] * (2.0 * rng.random::<f64>() - 1.0)
+    scaled_chain(scene, |stage, parameter| {
+        let tolerance = match (stage, parameter) {
+            (Stage::Accelerometer, Parameter::Frequency) => af,
+            (Stage::Accelerometer, Parameter::Damping) => az,
+            (_, Parameter::Frequency) => f,
+            (_, Parameter::Damping) => z,
+            (_, Parameter::Gain) => g,
+        };
+        1.0 + tolerance * (2.0 * rng.random::<f64>() - 1.0)
     })
 }
 
@@ -126,6 +156,7 @@ mod tests {
         ))
         .unwrap();
         let [tf, td, tg] = chain_tolerance(&scene);
+        let [af, ad] = accelerometer_tolerance(&scene);
         let (a, b) = (drawn_chain(&scene, 1), drawn_chain(&scene, 2));
         assert_ne!(a.sensor, b.sensor);
         assert_eq!(a.sensor, drawn_chain(&scene, 1).sensor);
@@ -135,6 +166,12 @@ mod tests {
                 assert!((m.damping_ratio / t.damping_ratio - 1.0).abs() <= td);
                 assert!((m.gain / t.gain - 1.0).abs() <= tg);
             }
+            let (m, t) = (
+                s.sensor.accelerometer.unwrap(),
+                scene.sensor.accelerometer.unwrap(),
+            );
+            assert!((m.frequency_hz / t.frequency_hz - 1.0).abs() <= af);
+            assert!((m.damping_ratio / t.damping_ratio - 1.0).abs() <= ad);
         }
     }
 }
