@@ -6,6 +6,7 @@ pub mod faults;
 pub mod generate;
 pub mod hertz_response;
 pub mod identify;
+pub mod identify_tolerance;
 pub mod par;
 pub mod sensor;
 pub mod stream;

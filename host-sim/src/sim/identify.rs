@@ -131,6 +131,9 @@ use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
 
 use crate::scene::BeamMode;
 use crate::sim::band_fit::{BandPulse, fit_band};
+use crate::sim::identify_tolerance::{
+    self as tolerance, BAND_FIT_FLOOR, RING_FLOOR, TOLERANCE_SIGMAS,
+};
 use crate::sim::sensor::expm;
 
 /// Order `q` of the pulse detector's linear predictor.
@@ -195,6 +198,13 @@ pub struct Estimate {
     pub value: f64,
     /// Its standard error, same unit.
     pub std_error: f64,
+}
+
+impl Estimate {
+    /// `(value, std_error)`, as [`crate::sim::identify_tolerance`] takes it.
+    fn pair(self) -> (f64, f64) {
+        (self.value, self.std_error)
+    }
 }
 
 /// One beam mode as identified.
@@ -1350,44 +1360,6 @@ fn identify_accelerometer(
     within_bounds(full, &leave_out, rings.len(), ResonanceSource::Ring)
 }
 
-/// A stated chain tolerance is a bound on each parameter's error: this many jackknife standard
-/// errors.
-pub const TOLERANCE_SIGMAS: f64 = 3.0;
-
-/// The smallest relative tolerance stated for `[frequency, damping, gain]`: the largest errors
-/// measured on host-sim's streams of 60 impacts (0.14 % in frequency, 13 % in damping, 4.5 % in
-/// gain; `docs/chain.md`, "Identification"), with a margin. The jackknife does not see the
-/// bias behind them: the slowest mode's damping comes out 5-13 % high with a standard error
-/// of about 1.5 % (a gap of 2-10 ms covers a third to two of its periods).
-pub const TOLERANCE_FLOOR: [f64; 3] = [2e-3, 0.15, 0.05];
-
-/// The smallest relative tolerance stated for `[frequency, damping]` of a band fitted to the
-/// Hertz pulses (`--hertz-pulses`): on host-sim's MEMS streams at 60-240 impacts it comes
-/// within -0.035 to +0.16 % in frequency and -0.02 to +0.05 % in damping, the frequency a
-/// little above its jackknife error (0.17-0.43 % low and 0.05-0.31 % low in damping before
-/// the pulses were taken about the quiet level rather than the median).
-pub const BAND_FIT_FLOOR: [f64; 2] = [5e-3, 1e-2];
-
-/// The smallest relative tolerance stated for `[frequency, damping]` of a resonance found from
-/// its ring: within 0.03 % and 2.2 % on host-sim's streams (40 kHz, zeta 0.05; 35 kHz, zeta
-/// 0.02), with a margin.
-pub const RING_FLOOR: [f64; 2] = [2e-3, 0.05];
-
-/// [`TOLERANCE_SIGMAS`] standard errors of `e`, relative to its value.
-fn relative_bound(e: Estimate) -> f64 {
-    TOLERANCE_SIGMAS * e.std_error / e.value.abs()
-}
-
-/// `x` rounded up to two significant digits (within a millionth of a digit counts as on it, so that a
-/// value converted from f32 stays put).
-fn round_up_2(x: f64) -> f64 {
-    if !(x.is_finite() && x > 0.0) {
-        return x;
-    }
-    let scale = 10f64.powi(1 - x.log10().floor() as i32);
-    (x * scale * (1.0 - 1e-6)).ceil() / scale
-}
-
 /// Significant digits for a value with standard error `se`: two digits of the error.
 fn fmt_value(v: f64, se: f64) -> String {
     let digits = if se.is_finite() && se > 0.0 {
@@ -1434,15 +1406,15 @@ impl Identification {
 
     /// The scene's `chain_tolerance` this identification supports for the beam modes,
     /// `[frequency, damping, gain]` (relative): for each, the largest [`TOLERANCE_SIGMAS`]
-    /// `sigma / |value|` over the identified modes, at least [`TOLERANCE_FLOOR`], rounded up to
-    /// two digits.
+    /// `sigma / |value|` over the identified modes, at least
+    /// [`TOLERANCE_FLOOR`](crate::sim::identify_tolerance::TOLERANCE_FLOOR), rounded up to two
+    /// digits ([`tolerance::modes_tolerance`]).
     pub fn chain_tolerance(&self) -> [f64; 3] {
-        let mut t = TOLERANCE_FLOOR;
-        for m in &self.modes {
-            let moved = [m.frequency_hz, m.damping_ratio, m.gain].map(relative_bound);
-            t = [t[0].max(moved[0]), t[1].max(moved[1]), t[2].max(moved[2])];
-        }
-        t.map(round_up_2)
+        tolerance::modes_tolerance(
+            self.modes
+                .iter()
+                .map(|m| [m.frequency_hz, m.damping_ratio, m.gain].map(Estimate::pair)),
+        )
     }
 
     /// The scene's `accelerometer_tolerance` this identification supports, `[frequency,
@@ -1454,21 +1426,19 @@ impl Identification {
         if !self.accelerometer_asked {
             return None;
         }
-        let t = match &self.accelerometer {
+        Some(match &self.accelerometer {
             Some(a) => {
                 let floor = match a.source {
                     ResonanceSource::Ring => RING_FLOOR,
                     ResonanceSource::HertzPulses => BAND_FIT_FLOOR,
                 };
-                let moved = [a.frequency_hz, a.damping_ratio].map(relative_bound);
-                [moved[0].max(floor[0]), moved[1].max(floor[1])]
+                tolerance::resonance_tolerance(
+                    [a.frequency_hz, a.damping_ratio].map(Estimate::pair),
+                    floor,
+                )
             }
-            None => {
-                let d = coalshock::ChainTolerance::IDENTIFIED;
-                [d.frequency, d.damping].map(f64::from)
-            }
-        };
-        Some(t.map(round_up_2))
+            None => tolerance::unidentified_resonance_tolerance(),
+        })
     }
 
     /// The `[sensor]` table (identified entries only), with standard errors as comments.
