@@ -133,6 +133,7 @@ use crate::scene::BeamMode;
 use crate::sim::band_fit::{BandPulse, fit_band};
 use crate::sim::identify_tolerance::{
     self as tolerance, BAND_FIT_FLOOR, RING_FLOOR, TOLERANCE_SIGMAS,
+    UNIDENTIFIED_RESONANCE_TOLERANCE,
 };
 use crate::sim::sensor::expm;
 
@@ -1420,8 +1421,9 @@ impl Identification {
     /// The scene's `accelerometer_tolerance` this identification supports, `[frequency,
     /// damping]` (relative), when the resonance was asked for: identified, the larger of
     /// [`TOLERANCE_SIGMAS`] standard errors and its method's floor ([`RING_FLOOR`],
-    /// [`BAND_FIT_FLOOR`]); not identified, the kernel's default (`ChainTolerance::IDENTIFIED`,
-    /// 2 % and 30 %), for the datasheet's value that stays.
+    /// [`BAND_FIT_FLOOR`]); not identified, the kernel's default
+    /// ([`UNIDENTIFIED_RESONANCE_TOLERANCE`], 2 % and 30 %), for the datasheet's value that
+    /// stays.
     pub fn accelerometer_tolerance(&self) -> Option<[f64; 2]> {
         if !self.accelerometer_asked {
             return None;
@@ -1437,7 +1439,7 @@ impl Identification {
                     floor,
                 )
             }
-            None => tolerance::unidentified_resonance_tolerance(),
+            None => UNIDENTIFIED_RESONANCE_TOLERANCE,
         })
     }
 

@@ -54,23 +54,47 @@ pub fn resonance_tolerance(estimates: [(f64, f64); 2], floor: [f64; 2]) -> [f64;
 
 /// The tolerance, `[frequency, damping]` (relative), of an accelerometer asked for and not
 /// identified, whose datasheet value stays: the kernel's default (`ChainTolerance::IDENTIFIED`,
-/// 2 % and 30 %).
-pub fn unidentified_resonance_tolerance() -> [f64; 2] {
-    let d = coalshock::ChainTolerance::IDENTIFIED;
-    [d.frequency, d.damping].map(f64::from).map(round_up_2)
-}
+/// 2 % and 30 %), stated in f64 (the kernel's f32 values are not two-digit numbers once
+/// converted: `0.3f32` is 0.30000001).
+pub const UNIDENTIFIED_RESONANCE_TOLERANCE: [f64; 2] = [0.02, 0.3];
+
+// The default above is the kernel's, to f32 precision.
+const _: () = {
+    let kernel = coalshock::ChainTolerance::IDENTIFIED;
+    let [frequency, damping] = UNIDENTIFIED_RESONANCE_TOLERANCE;
+    assert!(frequency as f32 == kernel.frequency && damping as f32 == kernel.damping);
+};
 
 /// [`TOLERANCE_SIGMAS`] standard errors relative to the value, for `(value, std_error)`.
 fn relative_bound((value, std_error): (f64, f64)) -> f64 {
     TOLERANCE_SIGMAS * std_error / value.abs()
 }
 
-/// `x` rounded up to two significant digits (within a millionth of a digit counts as on it, so that a
-/// value converted from f32 stays put).
+/// `x` rounded up to two significant digits.
 fn round_up_2(x: f64) -> f64 {
     if !(x.is_finite() && x > 0.0) {
         return x;
     }
     let scale = 10f64.powi(1 - x.log10().floor() as i32);
-    (x * scale * (1.0 - 1e-6)).ceil() / scale
+    (x * scale).ceil() / scale
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floors_and_default_are_stated_as_they_are_and_bounds_round_up() {
+        let stated = TOLERANCE_FLOOR
+            .into_iter()
+            .chain(BAND_FIT_FLOOR)
+            .chain(RING_FLOOR)
+            .chain(UNIDENTIFIED_RESONANCE_TOLERANCE);
+        for x in stated {
+            assert_eq!(round_up_2(x), x);
+        }
+        assert_eq!(round_up_2(0.02001), 0.021);
+        assert_eq!(round_up_2(0.1234), 0.13);
+        assert_eq!(round_up_2(0.0), 0.0);
+    }
 }
