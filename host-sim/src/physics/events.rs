@@ -19,6 +19,31 @@ const MAX_DEPTH: u32 = 30;
 /// Most coefficients of a [`Poly`]: degree 7 (Dop853's continuous output).
 pub(crate) const MAX_COEFFS: usize = 8;
 
+/// `$body` with `$n` bound to `$deg`, written out for the degrees of the methods' continuous
+/// outputs (3: Rodas4; 4: Dopri5 and RK4; 7: Dop853 and Radau13), so that each copy sees its
+/// degree as a constant and its loops unroll; the same arithmetic in the same order for any
+/// degree.
+macro_rules! by_degree {
+    ($deg:expr, $n:ident => $body:expr) => {
+        match $deg {
+            3 => {
+                let $n = 3;
+                $body
+            }
+            4 => {
+                let $n = 4;
+                $body
+            }
+            7 => {
+                let $n = 7;
+                $body
+            }
+            $n => $body,
+        }
+    };
+}
+pub(crate) use by_degree;
+
 /// A polynomial `c0 + c1 theta + ... + c_deg theta^deg` (power basis) of degree at most 7:
 /// a component of a step's continuous output (cubic for Rodas4, quartic for Dopri5 and RK4's
 /// Hermite interpolant padded with a zero, degree 7 for Dop853).
@@ -39,9 +64,16 @@ impl Poly {
     }
 
     /// Value at `theta` (Horner).
+    #[inline]
     pub fn eval(&self, theta: f64) -> f64 {
-        let mut acc = self.c[self.deg];
-        for &ci in self.c[..self.deg].iter().rev() {
+        by_degree!(self.deg, n => self.eval_deg(n, theta))
+    }
+
+    /// [`Poly::eval`] for `n = deg` (a constant where inlined).
+    #[inline(always)]
+    fn eval_deg(&self, n: usize, theta: f64) -> f64 {
+        let mut acc = self.c[n];
+        for &ci in self.c[..n].iter().rev() {
             acc = ci + theta * acc;
         }
         acc
@@ -59,23 +91,31 @@ impl Poly {
     /// sum_(k>=1) max(c_k, 0)` (as `theta^k <= 1`), less a rounding margin
     /// `4 (deg + 1) eps sum_k |c_k|` that also covers Horner's evaluation error. Settles most
     /// steps without the Bernstein coefficients.
+    #[inline]
     pub fn keeps_sign_on_unit(&self) -> bool {
-        let c = &self.c[..=self.deg];
+        by_degree!(self.deg, n => self.keeps_sign_deg(n))
+    }
+
+    /// [`Poly::keeps_sign_on_unit`] for `n = deg`.
+    #[inline(always)]
+    fn keeps_sign_deg(&self, n: usize) -> bool {
+        let c = &self.c[..=n];
         let (mut neg, mut pos, mut abs) = (0.0_f64, 0.0_f64, c[0].abs());
         for &ck in &c[1..] {
             neg += ck.min(0.0);
             pos += ck.max(0.0);
             abs += ck.abs();
         }
-        let margin = 4.0 * (self.deg as f64 + 1.0) * f64::EPSILON * abs;
+        let margin = 4.0 * (n as f64 + 1.0) * f64::EPSILON * abs;
         (c[0] > 0.0 && c[0] + neg > margin) || (c[0] < 0.0 && c[0] + pos < -margin)
     }
 
-    /// Bernstein coefficients `b_0 ..= b_deg` of the polynomial restricted to `[a, b]`
-    /// (the rest 0): Taylor shift to `a` (`q_j = p^(j)(a) (b - a)^j / j!`), then
-    /// `b_i = sum_(j <= i) C(i, j) / C(deg, j) q_j`.
-    pub fn bernstein(&self, a: f64, b: f64) -> [f64; MAX_COEFFS] {
-        let n = self.deg;
+    /// Bernstein coefficients `b_0 ..= b_n` of the polynomial of degree `n = deg` restricted
+    /// to `[a, b]` (the rest 0): Taylor shift to `a` (`q_j = p^(j)(a) (b - a)^j / j!`), then
+    /// `b_i = sum_(j <= i) C(i, j) / C(n, j) q_j`. `n` is a constant where inlined (see
+    /// `by_degree!`), so that the loops unroll.
+    #[inline(always)]
+    fn bernstein_deg(&self, n: usize, a: f64, b: f64) -> [f64; MAX_COEFFS] {
         let mut q = self.c;
         for i in 0..n {
             for j in (i..n).rev() {
@@ -110,9 +150,16 @@ impl Poly {
 
     /// Bounds `(lo, hi)` of the polynomial on `[a, b]` (the hull of its Bernstein
     /// coefficients).
+    #[inline]
     pub fn range(&self, a: f64, b: f64) -> (f64, f64) {
-        let bs = self.bernstein(a, b);
-        bs[..=self.deg]
+        by_degree!(self.deg, n => self.range_deg(n, a, b))
+    }
+
+    /// [`Poly::range`] for `n = deg`.
+    #[inline(always)]
+    fn range_deg(&self, n: usize, a: f64, b: f64) -> (f64, f64) {
+        let bs = self.bernstein_deg(n, a, b);
+        bs[..=n]
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
                 (lo.min(x), hi.max(x))
@@ -120,13 +167,20 @@ impl Poly {
     }
 
     /// What the Bernstein coefficients on `[a, b]` say about the roots there.
+    #[inline]
     pub fn enclosure(&self, a: f64, b: f64) -> Enclosure {
-        let all = self.bernstein(a, b);
-        let bs = &all[..=self.deg];
+        by_degree!(self.deg, n => self.enclosure_deg(n, a, b))
+    }
+
+    /// [`Poly::enclosure`] for `n = deg`.
+    #[inline(always)]
+    fn enclosure_deg(&self, n: usize, a: f64, b: f64) -> Enclosure {
+        let all = self.bernstein_deg(n, a, b);
+        let bs = &all[..=n];
         if bs.iter().all(|&x| x > 0.0) || bs.iter().all(|&x| x < 0.0) {
             return Enclosure::NoRoot;
         }
-        if bs[0] == 0.0 || bs[self.deg] == 0.0 {
+        if bs[0] == 0.0 || bs[n] == 0.0 {
             // A root at an end: the count below is for the open interval only.
             return Enclosure::Unknown;
         }

@@ -1,6 +1,6 @@
 //! A step's continuous output (dense output) and the lookup of the step that holds a time.
 
-use crate::physics::events::{MAX_COEFFS, Poly};
+use crate::physics::events::{MAX_COEFFS, Poly, by_degree};
 
 /// A step's continuous output in Hairer's nested form
 /// `y(theta) = r0 + theta (r1 + (1 - theta) (r2 + theta (r3 + (1 - theta) (r4 + ...))))`
@@ -36,9 +36,15 @@ impl Segment {
     }
 
     /// The state at step fraction `theta` (nested evaluation from the innermost term).
+    #[inline]
     pub(super) fn eval(&self, theta: f64) -> [f64; 2] {
+        by_degree!(self.n - 1, deg => self.eval_n(deg + 1, theta))
+    }
+
+    /// [`Segment::eval`] for `n` coefficients (a constant where inlined).
+    #[inline(always)]
+    fn eval_n(&self, n: usize, theta: f64) -> [f64; 2] {
         let th1 = 1.0 - theta;
-        let n = self.n;
         let c = |r: &[f64; MAX_COEFFS]| {
             let mut acc = r[n - 1];
             for i in (0..n - 1).rev() {
@@ -55,8 +61,15 @@ impl Segment {
     /// The margin `1e-11 sum |r_k|` dwarfs the rounding of this bound, of the power-basis
     /// conversion ([`Segment::poly`]) and of its evaluation, so a root search on the
     /// polynomial would find no sign change either.
+    #[inline]
     pub(super) fn keeps_sign(&self, i: usize, level: f64) -> bool {
-        let r = &self.r[i][..self.n];
+        by_degree!(self.n - 1, deg => self.keeps_sign_n(deg + 1, i, level))
+    }
+
+    /// [`Segment::keeps_sign`] for `n` coefficients.
+    #[inline(always)]
+    fn keeps_sign_n(&self, n: usize, i: usize, level: f64) -> bool {
+        let r = &self.r[i][..n];
         let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
         let mut abs = level.abs();
         for (k, &rk) in r.iter().enumerate().rev() {

@@ -34,8 +34,8 @@ pub(super) struct Rhs {
 /// unclamped force `G` while the force is on, none while the clamp holds it at zero.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Side {
-    /// [`ForceLaw::force`] (undamped Hertz, or once the clamp's switches are no longer
-    /// located).
+    /// [`ForceLaw::force`] (undamped Hertz, a method that never steps with Radau13, or once
+    /// the clamp's switches are no longer located).
     Law,
     /// [`ForceLaw::unclamped_force`]: the force is on.
     On,

@@ -109,7 +109,7 @@ pub(super) enum EventStep {
 }
 
 impl ContactRun {
-    pub(super) fn new(problem: &ContactProblem, scales: Scales) -> Self {
+    pub(super) fn new(problem: &ContactProblem, scales: Scales, method: Method) -> Self {
         let law = problem.law;
         let (d_m, u, time_s) = (scales.delta_m, scales.speed_m_s, scales.time_s);
         let p = time_s / (u * problem.mass_kg);
@@ -124,7 +124,9 @@ impl ContactRun {
             jac_evals: 0,
             last_jac: None,
             last_force_n: 0.0,
-            side: if law.is_clamped() {
+            // Only Radau13's stages take a side of the clamp's switch; the other methods'
+            // runs need not follow it.
+            side: if law.is_clamped() && matches!(method, Method::Radau13 | Method::Auto) {
                 Side::On
             } else {
                 Side::Law
@@ -215,8 +217,9 @@ impl ContactRun {
     }
 
     /// Takes the accepted `trial` of size `h` whole. Radau13's side of the clamp's switch
-    /// follows the sign of the switching function at the step's end (a step of another
-    /// method, or a sign change the search did not locate, may have crossed it).
+    /// (for [`Method::Radau13`] and [`Method::Auto`]) follows the sign of the switching
+    /// function at the step's end (a step of another method, or a sign change the search did
+    /// not locate, may have crossed it).
     pub(super) fn take(&mut self, trial: Trial, h: f64) {
         if self.rhs.side != Side::Law {
             let s = self.clamp_switch.value(trial.y1);
@@ -274,11 +277,13 @@ impl ContactRun {
                 // The force switched on or off: Radau13's stages now see the other side, or
                 // the law itself once no further switch is located.
                 self.work.clamp_restarts += 1;
-                self.rhs.side = if self.work.clamp_restarts >= MAX_CLAMP_RESTARTS {
-                    Side::Law
-                } else {
-                    self.rhs.side_leaving_switch(y_e)
-                };
+                if self.rhs.side != Side::Law {
+                    self.rhs.side = if self.work.clamp_restarts >= MAX_CLAMP_RESTARTS {
+                        Side::Law
+                    } else {
+                        self.rhs.side_leaving_switch(y_e)
+                    };
+                }
             }
             Landing::V => {
                 self.work.turns += 1;
@@ -333,7 +338,7 @@ pub fn integrate_contact(
 ) -> Result<ContactSolution, SimError> {
     validate_contact(problem, method, tol, limits)?;
     let scales = contact_scales(problem)?;
-    let mut run = ContactRun::new(problem, scales);
+    let mut run = ContactRun::new(problem, scales, method);
     let mut ctl = StepControl::new(method, tol, limits);
     loop {
         run.check_limits(limits)?;
