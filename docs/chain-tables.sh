@@ -7,6 +7,8 @@
 # drawn within the tolerance that `host-sim identify` reaches.
 # Usage: bash docs/chain-tables.sh [N]   (from the repository root; needs python3)
 set -euo pipefail
+# shellcheck source=docs/chain-scenes.sh
+source docs/chain-scenes.sh
 n=${1:-5000}
 cargo build --release -q -p host-sim
 bin=target/release/host-sim
@@ -61,8 +63,7 @@ echo
 echo "| scene, chain | seed | forced choice (%) | coverage (%) | calibration error max / mean (pp) | worst bin: stated / observed (verdicts) |"
 echo "| --- | --- | --- | --- | --- | --- |"
 for scene in tail_beam mems_chain piezo_chain; do
-    awk '/^\[sensor\]/ { print; print "chain_tolerance = { frequency = 0.0, damping = 0.0, gain = 0.0 }"; next } 1' \
-        "scenes/$scene.toml" > "$exact/$scene.toml"
+    with_sensor_lines "scenes/$scene.toml" "$EXACT_TOLERANCE" > "$exact/$scene.toml"
     for seed in 1 2; do cal_row "$scene (given right, tolerance)" "scenes/$scene.toml" "$seed"; done
     for seed in 1 2; do cal_row "$scene (known exactly)" "$exact/$scene.toml" "$seed"; done
     for seed in 1 2; do cal_row "$scene --chain-drawn" "scenes/$scene.toml" "$seed" --chain-drawn; done
@@ -72,15 +73,6 @@ done
 # `accelerometer_tolerance`) that `host-sim identify` prints for a stream of 60 impacts of the
 # scene (seed 1), with `--accelerometer` where the scene has one and `--hertz-pulses` for the
 # MEMS band, which does not ring long enough to be identified from its ring, n N.
-identified_tolerance() { # scene name -> the tolerance lines identify prints
-    "$bin" stream --scene "scenes/$1.toml" --n 60 --seed 1 --out "$exact/$1_id" > /dev/null
-    local fs flags=()
-    fs=$(awk -F'[= ]+' '/^sample_rate_hz/ { print $2; exit }' "scenes/$1.toml")
-    grep -q '^accelerometer' "scenes/$1.toml" && flags+=(--accelerometer)
-    [ "$1" = mems_chain ] && flags+=(--hertz-pulses)
-    "$bin" identify --stream "$exact/$1_id.bin" --sample-rate "$fs" "${flags[@]}" |
-        grep -E '^(chain|accelerometer)_tolerance' | sed 's/ *#.*//'
-}
 id_row() { # label, scene file, seed
     "$bin" evaluate --scene "$2" --n "$n" --seed "$3" --chain-drawn --json | python3 -c '
 import json, sys
@@ -96,7 +88,7 @@ echo
 echo "| scene, chain drawn within | seed | forced choice (%) | reference limit (%) | kernel - reference (pp) | coverage (%) | confident errors (%) | rejected / missed (%) | calibration error max (pp) |"
 echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
 for scene in tail_beam mems_chain piezo_chain; do
-    tol=$(identified_tolerance "$scene")
+    tol=$(identified_tolerance "$bin" "$exact" "$scene")
     label=$(python3 -c '
 import re, sys
 lines = sys.argv[1].splitlines()
@@ -106,8 +98,7 @@ if len(lines) > 1:
     af, az = (100 * float(v) for v in re.findall(r"= ([0-9.e-]+)", lines[1]))
     label += "; band %g %% / %g %%" % (af, az)
 print(label)' "$tol")
-    awk -v tol="$tol" '/^\[sensor\]/ { print; print tol; next } 1' \
-        "scenes/$scene.toml" > "$exact/${scene}_identified.toml"
+    with_sensor_lines "scenes/$scene.toml" "$tol" > "$exact/${scene}_identified.toml"
     for seed in 1 2; do
         id_row "$scene ($label)" "$exact/${scene}_identified.toml" "$seed"
     done

@@ -7,6 +7,8 @@
 # (`noise.stated_noise_check` of `host-sim evaluate --json`), n N per class, seed 1.
 # Usage: bash docs/noise-table.sh [N]   (from the repository root; needs python3)
 set -euo pipefail
+# shellcheck source=docs/chain-scenes.sh
+source docs/chain-scenes.sh
 n=${1:-5000}
 cargo build --release -q -p host-sim
 bin=target/release/host-sim
@@ -25,16 +27,6 @@ print("| %s | %d | %s | %s | %.1f |" % (sys.argv[1], c["pulses"], z(c["ln_radius
     100 * d["reliability"]["calibration_error_max"]))
 ' "$label"
 }
-# The tolerances identify prints for a 60-impact stream of the scene (seed 1).
-identified() { # scene name, identify flags...
-    local scene=$1
-    shift
-    local fs
-    "$bin" stream --scene "scenes/$scene.toml" --n 60 --seed 1 --out "$work/$scene" > /dev/null 2>&1
-    fs=$(awk -F'[= ]+' '/^sample_rate_hz/ { print $2; exit }' "scenes/$scene.toml")
-    "$bin" identify --stream "$work/$scene.bin" --sample-rate "$fs" "$@" 2>/dev/null |
-        grep -E '^(chain|accelerometer)_tolerance' | sed 's/ *#.*//'
-}
 echo "| scene, chain | pulses | ln R: rms z / abs(z) > 1, 2, 3 (%) | ln u: rms z / abs(z) > 1, 2, 3 (%) | calibration error max (pp) |"
 echo "| --- | --- | --- | --- | --- |"
 echo "| standard normal | | 1.00 / 31.7 / 4.55 / 0.27 | 1.00 / 31.7 / 4.55 / 0.27 | |"
@@ -42,16 +34,11 @@ for s in scenes/*.toml; do
     row "$(basename "$s" .toml)" "$s"
 done
 for scene in tail_beam mems_chain piezo_chain; do
-    awk '/^\[sensor\]/ { print; print "chain_tolerance = { frequency = 0.0, damping = 0.0, gain = 0.0 }"; next } 1' \
-        "scenes/$scene.toml" > "$work/${scene}_exact.toml"
+    with_sensor_lines "scenes/$scene.toml" "$EXACT_TOLERANCE" > "$work/${scene}_exact.toml"
     row "$scene, known exactly" "$work/${scene}_exact.toml"
     row "$scene --chain-drawn" "scenes/$scene.toml" --chain-drawn
-    flags=()
-    grep -q '^accelerometer' "scenes/$scene.toml" && flags+=(--accelerometer)
-    [ "$scene" = mems_chain ] && flags+=(--hertz-pulses)
-    tol=$(identified "$scene" "${flags[@]}")
-    awk -v tol="$tol" '/^\[sensor\]/ { print; print tol; next } 1' \
-        "scenes/$scene.toml" > "$work/${scene}_identified.toml"
+    tol=$(identified_tolerance "$bin" "$work" "$scene")
+    with_sensor_lines "scenes/$scene.toml" "$tol" > "$work/${scene}_identified.toml"
     row "$scene, identified tolerance, given right" "$work/${scene}_identified.toml"
     row "$scene, identified tolerance, --chain-drawn" "$work/${scene}_identified.toml" --chain-drawn
 done
