@@ -1,6 +1,6 @@
 //! From a measured pulse `(F_max, t_c)` to a verdict against the scene's class envelopes.
 
-use crate::envelope::{Inverted, NoiseXy, Side};
+use crate::envelope::{Envelope, Inverted, NoiseXy, Side};
 use crate::math::Backend;
 use crate::scene::Scene;
 
@@ -206,6 +206,15 @@ fn read_noise(
     )
 }
 
+/// The noise class `env` weighs the pulse point `p` on, `(own, widened by the chain's bias)`:
+/// a bent class carries the point's noise through its own map at the point, any other the
+/// point's.
+#[inline(always)]
+fn class_noise<M: Backend>(env: &Envelope, p: &PulsePoint) -> (NoiseXy, NoiseXy) {
+    env.bent_noise::<M>((p.lf, p.lt), (p.sf, p.st, p.cov), p.bias)
+        .unwrap_or((p.noise, p.wide))
+}
+
 impl<const N: usize, M: Backend> Scene<N, M> {
     /// Classifies a measured pulse.
     ///
@@ -238,15 +247,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// ```
     #[inline(never)]
     pub fn classify_with_likelihoods(&self, m: &Measurement) -> (Verdict, Option<[f32; N]>) {
-        let ok = |v: f32| v.is_finite() && v > 0.0;
-        let implausible = (Verdict::Rejected(RejectReason::Implausible), None);
-        if !ok(m.peak_force_n) || !ok(m.duration_s) {
-            return implausible;
-        }
-        let m = &self.hertz_equivalent(m);
-        if !ok(m.peak_force_n) || !ok(m.duration_s) {
-            return implausible;
-        }
+        let Some(h) = self.plausible_hertz(m) else {
+            return (Verdict::Rejected(RejectReason::Implausible), None);
+        };
+        let m = &h;
         let point = self.pulse_point(m);
         let mut lls = [f32::NEG_INFINITY; crate::scene::MAX_CLASSES];
         let mut class_lls = [f32::NEG_INFINITY; N];
@@ -260,7 +264,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             || !w.best_ll.is_finite()
             || !best_wide.is_finite()
         {
-            let inv = self.invert(w.nearest, m);
+            let inv = self.invert_hertz(w.nearest, m);
             let verdict = Verdict::OutOfEnvelope {
                 nearest: w.nearest,
                 radius: inv.map_or(Side::Inside, |v| v.radius_side),
@@ -340,10 +344,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             .zip(class_lls.iter_mut())
             .enumerate()
         {
-            // A bent class carries the noise through its own map, at the pulse's point.
-            let (noise, wide) = env
-                .bent_noise::<M>((lf, lt), (p.sf, p.st, p.cov), p.bias)
-                .unwrap_or((p.noise, p.wide));
+            let (noise, wide) = class_noise::<M>(env, p);
             let d = env.outside_sigmas_squared(lf, lt, wide);
             if d < nearest_d {
                 nearest_d = d;
@@ -394,19 +395,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// assert!(scene.located(9, &m).is_none());
     /// ```
     pub fn located(&self, class: u8, m: &Measurement) -> Option<(f32, f32, NoiseXy)> {
-        let ok = |v: f32| v.is_finite() && v > 0.0;
-        if !ok(m.peak_force_n) || !ok(m.duration_s) {
-            return None;
-        }
-        let h = self.hertz_equivalent(m);
-        if !ok(h.peak_force_n) || !ok(h.duration_s) {
-            return None;
-        }
+        let h = self.plausible_hertz(m)?;
         let env = self.envelopes().get(class as usize)?;
         let p = self.pulse_point(&h);
-        let (_, wide) = env
-            .bent_noise::<M>((p.lf, p.lt), (p.sf, p.st, p.cov), p.bias)
-            .unwrap_or((p.noise, p.wide));
+        let (_, wide) = class_noise::<M>(env, &p);
         let (x, y) = env.invert_ln(p.lf, p.lt);
         Some((x, y, wide))
     }
@@ -414,10 +406,31 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// The radius and speed class `class` would need for the measured pulse (after
     /// [`Scene::hertz_equivalent`]).
     pub fn invert(&self, class: u8, m: &Measurement) -> Option<Inverted> {
-        let h = self.hertz_equivalent(m);
+        self.invert_hertz(class, &self.hertz_equivalent(m))
+    }
+
+    /// The radius and speed class `class` would need for a measurement `h` that is already
+    /// Hertz-equivalent (no correction applied again).
+    fn invert_hertz(&self, class: u8, h: &Measurement) -> Option<Inverted> {
         self.envelopes()
             .get(class as usize)
             .map(|e| e.invert::<M>(h.peak_force_n, h.duration_s))
+    }
+
+    /// The Hertz-equivalent of `m` ([`Scene::hertz_equivalent`]) when both `m` and it are a
+    /// finite positive force and duration; `None` (what `classify` rejects as implausible)
+    /// otherwise.
+    #[inline(always)]
+    fn plausible_hertz(&self, m: &Measurement) -> Option<Measurement> {
+        let ok = |m: &Measurement| {
+            let pos = |v: f32| v.is_finite() && v > 0.0;
+            pos(m.peak_force_n) && pos(m.duration_s)
+        };
+        if !ok(m) {
+            return None;
+        }
+        let h = self.hertz_equivalent(m);
+        ok(&h).then_some(h)
     }
 
     /// The impact of the kernel's own model (undamped Hertz, or Thornton's undamped yield for a

@@ -137,6 +137,32 @@ fn outside_every_envelope_says_which_way() {
 }
 
 #[test]
+fn outside_every_envelope_on_a_damped_contact_corrects_once() {
+    // A damped contact's calibration (peak 0.5, duration 1.5 of Hertz's): the classifier
+    // divides the measured pulse by it once. Coal of R 0.08 m (twice the largest) at 3.5 m/s,
+    // measured through that calibration, needs a radius above every class's range and a
+    // speed inside both (gangue looks like coal at about 1.02 R, 1.70 u: 2.1 m/s). Corrected
+    // twice, ln u would move by (-ln 0.5 + 2 ln 1.5) / 1.6 = 0.94 (F ~ R^2 u^1.2,
+    // t_c ~ R u^-0.2), to 9.0 m/s as coal or 5.3 m/s as gangue: above either range.
+    let paper = Scene::paper().unwrap();
+    let mut settings = *paper.settings();
+    settings.contact.force_ratio = 0.5;
+    settings.contact.duration_ratio = 1.5;
+    let classes: Vec<_> = paper.classes().to_vec();
+    let scene: Scene = Scene::new(*paper.plate(), &classes, *paper.sensor(), settings).unwrap();
+    let mut m = exact(Material::COAL, 0.08, 3.5);
+    m.peak_force_n *= 0.5;
+    m.duration_s *= 1.5;
+    match scene.classify(&m) {
+        Verdict::OutOfEnvelope { radius, speed, .. } => {
+            assert_eq!(radius, Side::Above);
+            assert_eq!(speed, Side::Inside);
+        }
+        v => panic!("{v:?}"),
+    }
+}
+
+#[test]
 fn bad_measurements_are_rejected_not_panicking() {
     let scene = Scene::paper().unwrap();
     for (f, t) in [
