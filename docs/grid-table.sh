@@ -3,8 +3,10 @@
 # the project does not ship. Each scene is scenes/paper.toml with these fields changed:
 #   contact law   hunt_crossley, lankarani_nikravesh, flores, gonthier, tsuji
 #   restitution   0.3, 0.6, 0.9
-#   sample rate   the lowest the kernel accepts (2.5 samples in the scene's shortest Hertz
-#                 pulse, plus 1 %), 25 kS/s, 100 kS/s, 1 MS/s
+#   sample rate   the lowest the kernel accepts, plus 1 % (2.5 samples in the scene's shortest
+#                 Hertz pulse, and 1.6 in the shortest pulse the detector measures, that
+#                 time times the law's duration ratio, which `host-sim export` prints),
+#                 25 kS/s, 100 kS/s, 1 MS/s (a rate the kernel refuses is listed as refused)
 #   noise         4 and 15 counts RMS
 #   priors        coal : gangue 1 : 1 and 9 : 1
 # and is evaluated by `host-sim evaluate --json` (N impacts per class, seed SEED), JOBS scenes
@@ -27,9 +29,9 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 # The scenes, one TOML file each, and their list.
-python3 - "$work" "$laws" <<'EOF'
-import math, re, sys
-work, laws = sys.argv[1], sys.argv[2].split(",")
+python3 - "$work" "$laws" "$bin" <<'EOF'
+import math, re, subprocess, sys
+work, laws, bin = sys.argv[1], sys.argv[2].split(","), sys.argv[3]
 paper = open("scenes/paper.toml").read()
 # Hertz closed forms (paper Eqs. 3-9) for the shortest pulse of the scene's classes: the
 # kernel refuses a rate that puts fewer than 2.5 samples in it.
@@ -43,17 +45,27 @@ def contact_time_s(mat, radius_m, speed_m_s):
     delta = (5.0 * m * speed_m_s**2 / (4.0 * k)) ** 0.4
     return 2.9432752 * delta / speed_m_s
 shortest = min(contact_time_s(m, 0.015, 5.0) for m in materials)
-lowest = math.ceil(1.01 * 2.5 / shortest / 100.0) * 100.0
-rates = [("min", lowest), ("25k", 25e3), ("100k", 1e5), ("1M", 1e6)]
+def scene(law, e, rate):
+    s = paper.replace('law = "hertz"', 'law = "%s"\nrestitution = %g' % (law, e), 1)
+    return re.sub(r"^sample_rate_hz = .*$", "sample_rate_hz = %.1f" % rate, s, count=1, flags=re.M)
+def duration_ratio(law, e):
+    # The measured over the Hertz duration the scene build computes (rate-free), as exported.
+    path = "%s/ratio_%s_%g.toml" % (work, law, e)
+    open(path, "w").write(scene(law, e, 1e6))
+    out = subprocess.run([bin, "export", "--scene", path], capture_output=True, text=True,
+                         check=True).stdout
+    return float(re.search(r"duration_ratio: ([0-9.eE+-]+)", out).group(1))
 for law in laws:
     for e in (0.3, 0.6, 0.9):
+        needed = max(2.5 / shortest, 1.6 / (duration_ratio(law, e) * shortest))
+        lowest = math.ceil(1.01 * needed / 100.0) * 100.0
+        rates = [("min", lowest), ("25k", 25e3), ("100k", 1e5), ("1M", 1e6)]
         for rate_name, rate in rates:
             for noise in (4.0, 15.0):
                 for prior_name, coal_prior in (("1:1", 1.0), ("9:1", 9.0)):
                     name = "%s_e%.1f_%s_n%g_p%s" % (law, e, rate_name, noise, prior_name.replace(":", "-"))
-                    s = re.sub(r'^name = ".*"', 'name = "%s"' % name, paper, count=1, flags=re.M)
-                    s = s.replace('law = "hertz"', 'law = "%s"\nrestitution = %g' % (law, e), 1)
-                    s = re.sub(r"^sample_rate_hz = .*$", "sample_rate_hz = %.1f" % rate, s, count=1, flags=re.M)
+                    s = re.sub(r'^name = ".*"', 'name = "%s"' % name, scene(law, e, rate),
+                               count=1, flags=re.M)
                     s = re.sub(r"^noise_rms_counts = .*$", "noise_rms_counts = %.1f" % noise, s, count=1, flags=re.M)
                     s = re.sub(r"^prior = 1.0", "prior = %.1f" % coal_prior, s, count=1, flags=re.M)
                     open("%s/%s.toml" % (work, name), "w").write(s)
@@ -62,19 +74,27 @@ for law in laws:
 EOF
 
 cut -f1 "$work/list.tsv" | xargs -P "$jobs" -I{} sh -c \
-    '"$1" evaluate --scene "$2/$3.toml" --n "$4" --seed "$5" --json > "$2/$3.json" 2>/dev/null || echo "$3 failed" >&2' \
+    '"$1" evaluate --scene "$2/$3.toml" --n "$4" --seed "$5" --json > "$2/$3.json" 2> "$2/$3.err" || echo "$3 failed" >&2' \
     _ "$bin" "$work" {} "$n" "$seed"
 
 python3 - "$work" "$n" "$seed" > docs/grid.md <<'EOF'
 import json, os, sys
 work, n, seed = sys.argv[1], sys.argv[2], sys.argv[3]
 rows, misses = [], {"forced choice": [], "confident errors": [], "calibration": [], "failed": []}
+refused = []
 for line in open(os.path.join(work, "list.tsv")):
     name, law, e, rate, noise, priors = line.rstrip("\n").split("\t")
     path = os.path.join(work, name + ".json")
     try:
         d = json.load(open(path))
     except (OSError, ValueError):
+        err = open(os.path.join(work, name + ".err")).read()
+        if "the kernel refused the scene" in err:
+            why = err[err.index("the kernel refused the scene"):].splitlines()[0]
+            refused.append(name)
+            rows.append("| %s | %s | %s | %s | %s | refused | | | | | | %s |" % (
+                law, e, rate, noise, priors, why))
+            continue
         misses["failed"].append(name)
         rows.append("| %s | %s | %s | %s | %s | failed | | | | | | |" % (law, e, rate, noise, priors))
         continue
@@ -98,12 +118,14 @@ for line in open(os.path.join(work, "list.tsv")):
         100 * d["reference"]["accuracy"], 100 * gap, 100 * se, 100 * d["coverage"],
         100 * d["confident_error_rate"], 100 * rel["calibration_error_max"],
         ", ".join(fails) if fails else "met"))
-total = len(rows)
+total = len(rows) - len(refused)
 print("# The generated grid\n")
 print("`bash docs/grid-table.sh %s %s` wrote this file. Every scene is `scenes/paper.toml` with its" % (n, seed))
 print("contact law, restitution, sample rate, noise and priors changed (the script's header says")
 print("how), evaluated by `host-sim evaluate --n %s --seed %s --json`. The lowest rate is the" % (n, seed))
-print("lowest the kernel accepts (2.5 samples in the scene's shortest Hertz pulse, plus 1 %).\n")
+print("lowest the kernel accepts, plus 1 %: 2.5 samples in the scene's shortest Hertz pulse, and")
+print("1.6 (where the damped pulse's sampling correction starts) in the shortest pulse the")
+print("detector measures, the Hertz time times the law's duration ratio.\n")
 print("A row misses a target when:\n")
 print("- *forced choice*: the kernel is more than 1 pp below the reference limit beyond two standard")
 print("  errors of the difference;")
@@ -113,6 +135,8 @@ print("  2 pp beyond two of the bin's standard errors.\n")
 print("## Misses\n")
 for k, v in misses.items():
     print("- %s: %d of %d%s" % (k, len(v), total, (" (" + ", ".join(v) + ")") if v else ""))
+print("\nRefused by the kernel at the scene build (not counted above): %d%s" % (
+    len(refused), (" (" + ", ".join(refused) + ")") if refused else ""))
 print("\n## Every scene\n")
 print("| law | e | rate (Hz) | noise (counts) | priors coal : gangue | forced choice (%) | reference (%) | kernel - reference (pp) | coverage (%) | confident errors (%) | calibration error max (pp) | targets |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|")
@@ -125,7 +149,7 @@ EOF
     echo
     echo "\`cargo run --release -p host-sim --example sampled_phase -- LAW E\` (its module docs say how)."
     echo "Each block: the damped pulse's duration from the area (what the detector measures) over"
-    echo "the Hertz contact time, which the kernel's rate check uses; then the root mean square of"
+    echo "the Hertz contact time (the kernel asks 1.6 samples of it, and 2.5 of the Hertz time); then the root mean square of"
     echo "the kernel's fit error of \`ln F_max\` and \`ln t_c\` that a correction by samples per pulse"
     echo "alone leaves (the phase of the samples), and what a table over samples per pulse and the"
     echo "neighbours' asymmetry \`(after - before) / largest\` would leave."

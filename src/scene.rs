@@ -405,7 +405,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// Refuses, with a typed [`Error`]: invalid materials, ranges or sensor settings; fewer than
     /// two classes or more than `N`; any corner of any envelope whose peak force or duration
     /// f32 cannot carry; a scene whose shortest pulse is shorter than
-    /// [`MIN_DURATION_SAMPLES`] (2.5 samples): its pulses cannot be measured.
+    /// [`MIN_DURATION_SAMPLES`] (2.5 samples), or whose shortest measured pulse (times the
+    /// contact's `duration_ratio`) is shorter than its sampling correction reaches (1.6
+    /// samples with a phase table, else 2.5): its pulses cannot be measured.
     pub fn new(
         plate: Material,
         classes: &[ParticleClass],
@@ -448,7 +450,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             let _ = stored.push(c.clone());
         }
         relative_to_largest(&mut ln_priors);
-        durations_measurable(shortest, longest, sensor.sample_rate_hz)?;
+        durations_measurable(shortest, longest, sensor.sample_rate_hz, &settings)?;
         let chain_bias =
             ChainBias::new::<M>(&sensor.dynamics, sensor.sample_rate_hz, shortest, longest);
         let mut scene = Self {
@@ -752,16 +754,44 @@ fn relative_to_largest(ln_priors: &mut [f32]) {
     }
 }
 
-/// The scene's shortest pulse (s) spans at least [`MIN_DURATION_SAMPLES`] at `sample_rate_hz`
-/// and its longest a number of samples f32 carries; `OutOfRange` otherwise.
-fn durations_measurable(shortest_s: f32, longest_s: f32, sample_rate_hz: f32) -> Result<(), Error> {
+/// The scene's shortest pulse (s, the Hertz or bent contact time) spans at least
+/// [`MIN_DURATION_SAMPLES`] at `sample_rate_hz`, the shortest pulse the detector measures
+/// (that time times `contact.duration_ratio`: a damped pulse's duration from its area) at
+/// least [`measured_samples_floor`], and the longest a number of samples f32 carries;
+/// `OutOfRange` otherwise.
+fn durations_measurable(
+    shortest_s: f32,
+    longest_s: f32,
+    sample_rate_hz: f32,
+    settings: &Settings,
+) -> Result<(), Error> {
     if shortest_s * sample_rate_hz < MIN_DURATION_SAMPLES {
         return Err(Error::OutOfRange(
             "sample_rate_hz (shortest pulse < 2.5 samples)",
         ));
     }
+    let measured = shortest_s * settings.contact.duration_ratio * sample_rate_hz;
+    if measured < measured_samples_floor(settings) {
+        return Err(Error::OutOfRange(
+            "sample_rate_hz (shortest measured pulse shorter than the sampling correction reaches)",
+        ));
+    }
     representable(longest_s * sample_rate_hz, "longest pulse in samples")?;
     Ok(())
+}
+
+/// The fewest samples the shortest pulse the detector measures may span: where the scene's
+/// sampling correction starts, [`crate::sampled_phase::PHASE_FIRST_N`] (1.6) with a phase
+/// table, else [`MIN_DURATION_SAMPLES`] (2.5, where the correction by samples per pulse
+/// starts, [`SAMPLED_FIRST_N`]). Below it the correction would hold its first value, which a
+/// pulse's sampling error does not.
+fn measured_samples_floor(settings: &Settings) -> f32 {
+    #[cfg(feature = "sampled_phase")]
+    if settings.sampled_phase != SampledPhase::NONE {
+        return crate::sampled_phase::PHASE_FIRST_N;
+    }
+    let _ = settings;
+    MIN_DURATION_SAMPLES.max(SAMPLED_FIRST_N)
 }
 
 /// The envelope `env` of class `c` bent by its ratio map `table`, if it has one

@@ -126,3 +126,58 @@ fn yield_pressure_is_checked_and_bends_the_envelope() {
     assert!(yielding.envelopes()[1].ratio_map.is_none());
     assert!(yielding.duration_bounds_s().1 > 1.3 * elastic.duration_bounds_s().1);
 }
+
+/// The shortest Hertz contact time (s) of the paper scene (coal and sandstone on steel, R 0.015
+/// m, 5 m/s), from the textbook closed form in f64.
+fn paper_shortest_hertz_s() -> f64 {
+    let c = |m: &Material| (1.0 - (m.poisson as f64).powi(2)) / m.modulus_pa as f64;
+    [Material::COAL, Material::SANDSTONE]
+        .iter()
+        .map(|mat| {
+            let e = 1.0 / (c(mat) + c(&Material::CARBON_STEEL));
+            let (r, u) = (0.015f64, 5.0f64);
+            let m = mat.density_kg_m3 as f64 * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+            let d = (5.0 * m * u * u / (4.0 * e * 4.0 / 3.0 * r.sqrt())).powf(0.4);
+            2.943_275_184_324_7 * d / u
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The paper scene at `rate_hz` with a damped contact whose measured duration is 0.6 of
+/// Hertz's, with or without a phase table.
+fn damped_paper_at(rate_hz: f64, phase_table: bool) -> Result<Scene, coalshock::Error> {
+    let paper = Scene::paper().unwrap();
+    let mut settings = *paper.settings();
+    settings.contact.duration_ratio = 0.6;
+    #[cfg(feature = "sampled_phase")]
+    if phase_table {
+        let mut t = coalshock::SampledPhase::NONE;
+        t.asymmetry[0] = [-0.5, 0.5];
+        settings.sampled_phase = t;
+    }
+    #[cfg(not(feature = "sampled_phase"))]
+    let _ = phase_table;
+    let mut sensor = *paper.sensor();
+    sensor.sample_rate_hz = rate_hz as f32;
+    let classes: Vec<_> = paper.classes().to_vec();
+    Scene::new(*paper.plate(), &classes, sensor, settings)
+}
+
+/// A damped pulse the detector measures at 0.6 of the Hertz time: at 3 Hertz samples it has
+/// 1.8, below the 2.5 where the correction by samples per pulse starts, and is refused; with
+/// a phase table (from 1.6 samples) it is accepted; at 1.55 measured samples (2.6 Hertz samples) neither is.
+#[test]
+fn a_rate_is_refused_where_the_measured_pulse_is_shorter_than_the_correction_reaches() {
+    let t = paper_shortest_hertz_s();
+    let at_measured = |n: f64| n / (0.6 * t);
+    let refused = |r: Result<Scene, coalshock::Error>| match r {
+        Err(coalshock::Error::OutOfRange(what)) => what.contains("shortest measured pulse"),
+        _ => false,
+    };
+    assert!(refused(damped_paper_at(at_measured(1.8), false)));
+    assert!(damped_paper_at(at_measured(2.6), false).is_ok());
+    if cfg!(feature = "sampled_phase") {
+        assert!(damped_paper_at(at_measured(1.8), true).is_ok());
+        assert!(refused(damped_paper_at(at_measured(1.55), true)));
+    }
+}

@@ -113,21 +113,36 @@ fn hunt_crossley_at_25k_with_skewed_priors() {
     check("hunt_crossley", 0.6, 25e3, 4.0, 9.0);
 }
 
-/// Flores at e 0.3 measures a pulse 0.58 of the Hertz contact time from its area: at the
-/// lowest rate the kernel accepts (2.5 samples in the shortest Hertz pulse) its shortest
-/// measured pulse has about 1.45, below the 1.6 of the phase table's first row, and the scene
-/// build warns; at 2.5 samples, and at 100 kS/s, or for the undamped paper scene, nothing is said.
+/// Flores at e 0.3 measures a pulse 0.58 of the Hertz contact time from its area: at 2.5
+/// samples in the shortest Hertz pulse its shortest measured pulse has about 1.45, below the
+/// 1.6 of the phase table's first row: the scene build warns with the rate it needs, and the
+/// kernel refuses the scene, naming the sample rate. At that rate, at 100 kS/s, or for the
+/// undamped paper scene, nothing is said and the kernel accepts it.
 #[test]
-fn a_damped_scene_warns_when_its_measured_pulses_are_too_short() {
+fn a_damped_scene_is_refused_when_its_measured_pulses_are_too_short() {
     use host_sim::calibrate::{sampling_warning, shortest_measured_samples};
     let low = grid_scene("flores", 0.3, 22_200.0, 4.0, 1.0);
     let n = shortest_measured_samples(&low)
         .unwrap()
         .expect("a damped law");
     assert!((1.3..1.6).contains(&n), "{n}");
-    assert!(sampling_warning(&low).unwrap().is_some());
-    let enough = grid_scene("flores", 0.3, 22_200.0 * 2.5 / n * 1.001, 4.0, 1.0);
+    let warning = sampling_warning(&low).unwrap().expect("a warning");
+    let rate: f64 = warning
+        .rsplit("at least ")
+        .next()
+        .and_then(|t| t.trim_end_matches(" Hz").parse().ok())
+        .expect("the rate it needs");
+    assert!(
+        (rate / (22_200.0 * 1.6 / n) - 1.0).abs() < 1e-3,
+        "{warning}"
+    );
+    let refused = host_sim::kernel_scene::scene_to_kernel(&low)
+        .unwrap_err()
+        .to_string();
+    assert!(refused.contains("sample_rate_hz"), "{refused}");
+    let enough = grid_scene("flores", 0.3, rate * 1.001, 4.0, 1.0);
     assert!(sampling_warning(&enough).unwrap().is_none());
+    assert!(host_sim::kernel_scene::scene_to_kernel(&enough).is_ok());
     assert!(
         sampling_warning(&grid_scene("flores", 0.3, 1e5, 4.0, 1.0))
             .unwrap()

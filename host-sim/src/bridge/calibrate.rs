@@ -580,8 +580,9 @@ pub fn shortest_measured_samples(scene: &SceneFile) -> Result<Option<f64>, SimEr
 /// A warning when the shortest pulse the detector measures in `scene`
 /// ([`shortest_measured_samples`]) has fewer samples than its sampling correction starts from:
 /// the phase table's first row, `coalshock::sampled_phase::PHASE_FIRST_N` (1.6), for a damped
-/// law, else the 2.5 of the correction by samples per pulse (the kernel checks the Hertz
-/// contact time, not the damped pulse's); `None` otherwise.
+/// law, else the 2.5 of the correction by samples per pulse, with the rate that gives it. The
+/// kernel refuses such a scene (`coalshock::Scene::new`); this names the rate it needs. `None`
+/// otherwise.
 pub fn sampling_warning(scene: &SceneFile) -> Result<Option<String>, SimError> {
     let first = if scene.contact == LawSpec::Hertz {
         f64::from(SAMPLED_FIRST_N)
@@ -593,9 +594,8 @@ pub fn sampling_warning(scene: &SceneFile) -> Result<Option<String>, SimError> {
         .map(|n| {
             format!(
                 "the damped contact shortens the pulse the detector measures: the shortest has \
-                 {n:.2} samples, below the {first} its sampling correction starts from, which \
-                 holds its first value there, so expect forced choice below the reference \
-                 limit; raise the sample rate to at least {:.0} Hz",
+                 {n:.2} samples, below the {first:.1} its sampling correction starts from, so the \
+                 kernel refuses this sample rate; raise it to at least {:.0} Hz",
                 scene.sensor.sample_rate_hz * first / n
             )
         }))
