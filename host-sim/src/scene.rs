@@ -518,6 +518,19 @@ impl ClassSpec {
         }
     }
 
+    /// The radius (m) and speed (m/s) at the quantiles `radius_q` and `speed_q` (in `[0, 1]`)
+    /// of the class's priors: `R = exp(ln R_min + radius_q (ln R_max - ln R_min))`, and
+    /// `u = u_min + speed_q (u_max - u_min)` or `u = sqrt(2 g (h_min + speed_q (h_max - h_min)))`.
+    pub fn at_quantiles(&self, radius_q: f64, speed_q: f64) -> (f64, f64) {
+        let (r0, r1) = (self.radius_m.min.ln(), self.radius_m.max.ln());
+        let radius_m = (r0 + radius_q * (r1 - r0)).exp();
+        let speed_m_s = match self.speed {
+            SpeedSpec::Uniform(s) => s.min + speed_q * (s.max - s.min),
+            SpeedSpec::DropHeight(h) => drop_speed_m_s(h.min + speed_q * (h.max - h.min)),
+        };
+        (radius_m, speed_m_s)
+    }
+
     /// The speed range in m/s: the given one, or `sqrt(2 g h)` at both ends of the drop
     /// height range (`g = 9.80665 m/s^2`).
     pub fn speed_range_m_s(&self) -> Range64 {

@@ -14,7 +14,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::physics::hertz64::HertzImpact64;
 use crate::physics::impact::{ImpactSpec, simulate};
 use crate::physics::integrate::SimError;
-use crate::scene::{SceneFile, SpeedSpec};
+use crate::scene::SceneFile;
 use crate::sim::faults::{QuietFaults, busy_spans, fault_impacts, remove_dropped};
 use crate::sim::par::map_ordered;
 use crate::sim::sensor::{ForcePulse, ForceTrack, PulseShape, Sensor};
@@ -260,13 +260,7 @@ fn draw_class_size_speed(
             })
             .unwrap_or(probs.len() - 1)
     });
-    let c = &scene.classes[class];
-    let (r0, r1) = (c.radius_m.min.ln(), c.radius_m.max.ln());
-    let radius_m = (r0 + r_radius * (r1 - r0)).exp();
-    let speed_m_s = match c.speed {
-        SpeedSpec::Uniform(s) => s.min + r_speed * (s.max - s.min),
-        SpeedSpec::DropHeight(h) => crate::scene::drop_speed_m_s(h.min + r_speed * (h.max - h.min)),
-    };
+    let (radius_m, speed_m_s) = scene.classes[class].at_quantiles(r_radius, r_speed);
     (class, radius_m, speed_m_s)
 }
 
