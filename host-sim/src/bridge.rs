@@ -8,3 +8,4 @@ pub mod kernel_scene;
 pub mod ratio_table;
 pub mod sampled_fit;
 pub mod sampled_phase;
+pub mod skew_tolerance;

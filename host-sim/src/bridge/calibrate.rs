@@ -25,7 +25,8 @@ use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 use crate::bridge::sampled_fit::force_at;
 pub use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
 use crate::bridge::sampled_phase::{Phase64, phase_calibration};
-use crate::physics::hertz64::HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR;
+use crate::bridge::skew_tolerance::{GridImpact, sampled_skew_tolerance};
+use crate::physics::hertz64::{HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR, HertzImpact64};
 use crate::physics::impact::{ImpactSpec, simulate};
 use crate::physics::integrate::SimError;
 use crate::physics::law_spec::LawSpec;
@@ -138,10 +139,9 @@ pub struct Calibration64 {
     pub skewness: f64,
     /// Largest distance of one impact's skewness from the mean.
     pub skewness_spread: f64,
-    /// How far the skewness the detector measures, above its trigger, can fall outside the
-    /// band it allows around [`Calibration64::skewness`] ([`skewness_cut_excess`]); 0 when
-    /// it stays inside.
-    pub skewness_cut_excess: f64,
+    /// The skew tolerance the impacts' pulses sampled at the scene's rate need beside the
+    /// detector's own allowance ([`sampled_skew_tolerance`]); 0 when they stay inside it.
+    pub skewness_sampled_tolerance: f64,
     /// The most negative second difference `v[i-1] - 2 v[i] + v[i+1]` of any impact's pulse
     /// sampled at the scene's rate (16 sample phases), over its peak, negated: how sharply the
     /// contact's own pulse bends (0.02-0.2 for Hertz, about 0.56 for Adams with `d = 1e-5 m`
@@ -213,57 +213,6 @@ pub fn skewness(series: &[(f64, f64)], cut: f64) -> f64 {
     } else {
         0.0
     }
-}
-
-/// What the detector's skewness check (`coalshock::detector`, `symmetric_enough`) sees of a
-/// scene: its trigger level and noise in counts, the counts per newton of contact force on
-/// the rigid path, and the sample rate.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SkewCheck {
-    /// Trigger level above the baseline, `max(trigger_sigmas noise, 2)` counts.
-    pub trigger_counts: f64,
-    /// Noise RMS in counts.
-    pub noise_counts: f64,
-    /// Counts per newton, `counts_per_m_s2 / effective_mass_kg`.
-    pub counts_per_n: f64,
-    /// Sample rate in Hz.
-    pub sample_rate_hz: f64,
-}
-
-/// The detector takes the skewness ([`skewness`], weighted by the force squared) of a pulse's
-/// samples above its trigger level, a fraction `c` of the peak, over its `n` samples there,
-/// and allows beside its tolerance `0.6 / n + 40 (noise / peak) / sqrt(n) + 4 |skewness|
-/// min(c, 1/4)` (and passes pulses of fewer than 8 such samples). A strongly damped pulse's
-/// long low tail carries some of its skewness (Flores at e 0.3: 0.93 above 0.5 % of the
-/// peak, 0.89 above 2 %, 0.81 above 5 %), and a few samples of a skewed pulse weigh its
-/// sides unevenly as the sampling phase moves (Flores at e 0.3 at 25 kS/s, 8-10 samples
-/// above the trigger: 0.92 +- 0.08 on the pulses the allowance passed, 1.01 +- 0.27 on those
-/// it rejected before this took the sampling), which that allowance may not cover. This is
-/// how far the skewness of `series` (`(t_s, force_n)`) sampled at the scene's rate, at 16
-/// phases, falls outside the allowance around `skewness_mean` at worst; 0 or more. (A chain's equaliser raises the trigger and
-/// the noise by its noise gain, 1.0-1.6 on the shipped chains; the tolerance's margin of 1.5
-/// covers that.)
-pub fn skewness_cut_excess(series: &[(f64, f64)], skewness_mean: f64, check: &SkewCheck) -> f64 {
-    let peak_counts = series.iter().fold(0.0f64, |m, p| m.max(p.1)) * check.counts_per_n;
-    if !(peak_counts > 0.0 && check.trigger_counts > 0.0 && check.sample_rate_hz > 0.0) {
-        return 0.0;
-    }
-    let mut worst = 0.0f64;
-    for k in 0..16 {
-        let samples: Vec<(f64, f64)> = phase_samples(series, check.sample_rate_hz, k).collect();
-        let above = |p: &&(f64, f64)| p.1 * check.counts_per_n > check.trigger_counts;
-        let n = samples.iter().filter(above).count() as f64;
-        let sampled_peak = samples.iter().fold(0.0f64, |m, p| m.max(p.1)) * check.counts_per_n;
-        if n < 8.0 || sampled_peak <= 0.0 {
-            continue;
-        }
-        let cut = check.trigger_counts / sampled_peak;
-        let allowed = 0.6 / n
-            + 40.0 * check.noise_counts / (sampled_peak * n.sqrt())
-            + 4.0 * skewness_mean.abs() * cut.min(0.25);
-        worst = worst.max((skewness(&samples, cut) - skewness_mean).abs() - allowed);
-    }
-    worst
 }
 
 /// `series` (`(t_s, force_n)`) sampled every `1 / sample_rate_hz` at phase `k` of 16: from
@@ -416,6 +365,7 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
         pulses,
         shortest_s,
         ln_top,
+        hertz,
     } = integrate_grid(scene)?;
     let fs = scene.sensor.sample_rate_hz;
     let damped = scene.contact != LawSpec::Hertz;
@@ -424,7 +374,7 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     let (sampled_fit, phase) = sampled_fit.map_or((None, None), |(s, p)| (Some(s), p));
     let n = all.len() as f64;
     let skew_mean = skews.iter().sum::<f64>() / n;
-    let cut_excess = grid_cut_excess(scene, &all, skew_mean);
+    let sampled_tolerance = sampled_skew_tolerance(scene, &class_grids(&all, &hertz), skew_mean)?;
     let all: Vec<PulseRatios> = all.into_iter().map(|(r, _)| r).collect();
     let mean = |f: fn(&PulseRatios) -> f64| all.iter().map(|p| f(p).ln()).sum::<f64>() / n;
     let (lf, ld, ls) = (mean(|p| p.force), mean(|p| p.duration), mean(|p| p.shape));
@@ -450,7 +400,7 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
             .iter()
             .map(|s| (s - skew_mean).abs())
             .fold(0.0, f64::max),
-        skewness_cut_excess: cut_excess,
+        skewness_sampled_tolerance: sampled_tolerance,
         sharpest_bend: bend,
         sampled_shape_spread: sampled,
         sampled: sampled_fit,
@@ -475,6 +425,8 @@ struct GridPulses {
     shortest_s: f64,
     /// Sum over the impacts of `ln (top_fraction / Hertz's)`.
     ln_top: f64,
+    /// Each impact's undamped Hertz closed forms.
+    hertz: Vec<HertzImpact64>,
 }
 
 /// Integrates each class of `scene`, with its own law ([`SceneFile::class_law`]), at radius
@@ -490,6 +442,7 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
         pulses: Vec::new(),
         shortest_s: f64::INFINITY,
         ln_top: 0.0,
+        hertz: Vec::new(),
     };
     let fs = scene.sensor.sample_rate_hz;
     for (i, class) in scene.classes.iter().enumerate() {
@@ -500,7 +453,9 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
                 spec.law = scene.class_law(i)?;
                 let p = pulse_ratios_and_series(&spec)?;
                 g.ln_top += (p.top_fraction / hertz_top_fraction()).ln();
-                g.shortest_s = g.shortest_s.min(spec.hertz()?.duration_s);
+                let hertz = spec.hertz()?;
+                g.shortest_s = g.shortest_s.min(hertz.duration_s);
+                g.hertz.push(hertz);
                 g.pulses.push((p.peak_n, p.area_duration_s));
                 g.bend = g.bend.max(sharpest_bend(&p.series, fs));
                 g.skews.push(skewness(&p.series, 0.005));
@@ -533,23 +488,25 @@ fn sampled_of_grid(
     (sampled_calibration(&continuous), phase)
 }
 
-/// The largest [`skewness_cut_excess`] of the grid's pulses (`all`) about `skew_mean`, at
-/// `scene`'s trigger level, noise, gain and sample rate.
-fn grid_cut_excess(
-    scene: &SceneFile,
-    all: &[(PulseRatios, Vec<(f64, f64)>)],
-    skew_mean: f64,
-) -> f64 {
-    let trigger_sigmas = f64::from(scene.settings.trigger_sigmas);
-    let check = SkewCheck {
-        trigger_counts: (trigger_sigmas * scene.sensor.noise_rms_counts).max(2.0),
-        noise_counts: scene.sensor.noise_rms_counts,
-        counts_per_n: scene.sensor.counts_per_m_s2 / scene.sensor.effective_mass_kg,
-        sample_rate_hz: scene.sensor.sample_rate_hz,
-    };
-    all.iter()
-        .map(|(_, series)| skewness_cut_excess(series, skew_mean, &check))
-        .fold(0.0, f64::max)
+/// Impacts per class that [`integrate_grid`] integrates: radius x speed, 3 x 3.
+const GRID_PER_CLASS: usize = 9;
+
+/// The grid's impacts by class, as [`sampled_skew_tolerance`] takes them: each impact's
+/// series (`all`, in grid order) with its Hertz closed forms (`hertz`).
+fn class_grids<'a>(
+    all: &'a [(PulseRatios, Vec<(f64, f64)>)],
+    hertz: &[HertzImpact64],
+) -> Vec<Vec<GridImpact<'a>>> {
+    all.chunks(GRID_PER_CLASS)
+        .zip(hertz.chunks(GRID_PER_CLASS))
+        .map(|(pulses, hertz)| {
+            pulses
+                .iter()
+                .zip(hertz)
+                .map(|((_, series), &hertz)| GridImpact { hertz, series })
+                .collect()
+        })
+        .collect()
 }
 
 /// Samples in the shortest pulse the kernel's detector measures in `scene`: the shortest Hertz

@@ -186,11 +186,12 @@ pub fn sampled_to_kernel(t: &Sampled64) -> SampledCalibration {
 /// them: `shape_tolerance >= 1.5 x` the spread of `ln q` (between impacts, plus that of
 /// sampling at the scene's rate), `model_sigma >= ` the larger spread of `ln F` and `ln t`,
 /// `spike_fraction >= 1.25 x` the sharpest sampled bend, `skew_tolerance >= 1.5 x` the spread
-/// of the skewness, or what of it the detector's trigger cut leaves outside its allowance if
-/// that is more (unless the file states them other than the default: a file value equal to
-/// the kernel's default is not told from a missing one). A scene whose classes carry ratio tables leaves the force and duration ratios
-/// to them (1 here), and its `model_sigma` is at least what the tables leave against direct
-/// integration (`table_residual`). Every value is rounded to `f32` here.
+/// of the skewness between impacts, and at least what the scene's pulses sampled at its rate
+/// need ([`crate::bridge::skew_tolerance`]) (unless the file states them other than the
+/// default: a file value equal to the kernel's default is not told from a missing one). A
+/// scene whose classes carry ratio tables leaves the force and duration ratios to them (1
+/// here), and its `model_sigma` is at least what the tables leave against direct integration
+/// (`table_residual`). Every value is rounded to `f32` here.
 pub fn settings_to_kernel(
     file: &Settings,
     contact: Option<&Calibration64>,
@@ -242,8 +243,8 @@ pub fn settings_to_kernel(
             s.model_sigma = s.model_sigma.max(spread as f32);
         }
         if s.skew_tolerance == d.skew_tolerance {
-            let spread = c.skewness_spread.max(c.skewness_cut_excess);
-            s.skew_tolerance = s.skew_tolerance.max((1.5 * spread) as f32);
+            let needed = (1.5 * c.skewness_spread).max(c.skewness_sampled_tolerance);
+            s.skew_tolerance = s.skew_tolerance.max(needed as f32);
         }
         if s.spike_fraction == d.spike_fraction {
             s.spike_fraction = s.spike_fraction.max((1.25 * c.sharpest_bend) as f32);
