@@ -231,9 +231,10 @@ fn resolve_scene(path: Option<&Path>) -> Result<(SceneFile, String)> {
 
 /// Reports on standard error the share of the scene's impacts predicted to clip the ADC
 /// (`host_sim::saturation`), as a warning above 1 %, and warns when a calibrated contact
-/// leaves its shortest measured pulse fewer samples than its sampling correction starts from:
-/// 1.6 for a damped law (`coalshock::sampled_phase::PHASE_FIRST_N`), 2.5 for an undamped one
-/// that yields (`host_sim::calibrate::sampling_warning`).
+/// leaves its shortest measured pulse fewer samples than its sampling correction starts from
+/// (1.6 for a damped law, `coalshock::sampled_phase::PHASE_FIRST_N`, 2.5 for an undamped one
+/// that yields), naming the rate the kernel, which refuses such a scene, needs
+/// (`host_sim::calibrate::sampling_warning`).
 fn report_saturation(scene: &SceneFile) {
     match host_sim::saturation::predict(scene) {
         Ok(p) => {

@@ -550,7 +550,7 @@ pub fn sampling_warning(scene: &SceneFile) -> Result<Option<String>, SimError> {
         .filter(|&n| n < first)
         .map(|n| {
             format!(
-                "the damped contact shortens the pulse the detector measures: the shortest has \
+                "the shortest pulse the detector measures (its duration from the area) has \
                  {n:.2} samples, below the {first:.1} its sampling correction starts from, so the \
                  kernel refuses this sample rate; raise it to at least {:.0} Hz",
                 scene.sensor.sample_rate_hz * first / n
