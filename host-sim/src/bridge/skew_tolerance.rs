@@ -33,7 +33,7 @@ pub const GRID: usize = 32;
 
 /// Sampling phases per impact, `(k + 1/2) / PHASES` of the sample interval, for an impact of
 /// up to `PHASE_BUDGET / PHASES` (16) samples; one of more samples takes fewer
-/// ([`phases_for`]).
+/// (`phases_for`).
 pub const PHASES: usize = 32;
 
 /// Samples per impact across its phases, beyond which fewer phases are taken: a pulse of many
@@ -100,7 +100,7 @@ pub fn sampled_skew_tolerance(
 
 /// The tolerance class `class` of `scene` needs: the smallest `t >= 0` with at most
 /// [`FALSE_REJECTION_SHARE`] of the weight of its impacts' sampled excesses
-/// ([`impact_excesses`]) above `t`. Each impact at the quantile midpoints of its radius and
+/// (`impact_excesses`) above `t`. Each impact at the quantile midpoints of its radius and
 /// speed takes the shape of the nearest impact of `grid` (in `ln R` and `u` over their ranges;
 /// the same shape for a restitution-parametrised law), stretched to its own Hertz `t_c` and
 /// scaled to its own `F_max`.
