@@ -4,6 +4,7 @@
 //! below the first row, and reads nothing beyond the last row; the scene check refuses
 //! values out of range; the neighbour asymmetry is `(after - before) / max`; the measured
 //! duration's noise, which moves where the table is read, is stated.
+#![cfg(feature = "sampled_phase")]
 
 use coalshock::sampled_phase::{
     PHASE_COLUMNS, PHASE_FIRST_N, PHASE_ROWS, PHASE_STEP, SampledPhase, neighbour_asymmetry,

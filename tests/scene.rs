@@ -92,6 +92,7 @@ fn narrow_scene_separates() {
 /// class bends its envelope and lengthens the scene's longest pulse (Thornton's contact
 /// lasts longer), and the same classes without it build the Hertz scene exactly.
 #[test]
+#[cfg(feature = "plasticity")]
 fn yield_pressure_is_checked_and_bends_the_envelope() {
     use coalshock::{Error, ParticleClass, Range, SensorChain, Settings, Speed};
     let radius = Range::new(0.015, 0.04);
