@@ -1206,7 +1206,7 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
             })
             .collect();
         // The pulse model starts from zero: the samples about the stream's quiet level.
-        let level = quiet_level(&slices, &poles, fs);
+        let level = quiet_level(&slices, &fits, &poles, fs);
         let y_quiet: Vec<f64> = y.iter().map(|v| v - level).collect();
         let fits_quiet: Vec<Option<WindowFit>> = windows
             .iter()
@@ -1240,26 +1240,28 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
 }
 
 /// The quiet level of the samples about their median (counts): the constant that, fitted
-/// jointly with every free window's own amplitudes of the modes `poles`, fits the windows
-/// best. The median is not that level: the pulses, a few percent of the samples and all of
+/// jointly with every free window's own amplitudes of the modes `poles` (`fits`, each window's
+/// fit of itself), fits the windows best. The median is not that level: the pulses, a few percent of the samples and all of
 /// one sign, lift it (by 2-4 counts on `scenes/mems_chain.toml`). A window's constant alone
 /// would be nearly collinear with a slow mode over a short window (see [`fit_amplitudes`]);
 /// shared by all windows, among them the quiet lead-in before the first pulse, it is not:
 /// `sum_w <r1_w, ry_w> / sum_w <r1_w, r1_w>`, `ry_w` and `r1_w` the residuals of the window's
 /// fit of itself and of a constant, which weights each window by what of a constant its modes
 /// cannot take up.
-fn quiet_level(slices: &[&[f64]], poles: &[Complex<f64>], fs: f64) -> f64 {
+fn quiet_level(
+    slices: &[&[f64]],
+    fits: &[Option<WindowFit>],
+    poles: &[Complex<f64>],
+    fs: f64,
+) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
-    for w in slices {
+    for (w, fit) in slices.iter().zip(fits) {
         let ones = vec![1.0; w.len()];
-        let (Some(cy), Some(c1)) = (
-            fit_amplitudes(w, poles, fs),
-            fit_amplitudes(&ones, poles, fs),
-        ) else {
+        let (Some(cy), Some(c1)) = (fit, fit_amplitudes(&ones, poles, fs)) else {
             continue;
         };
         for (n, &v) in w.iter().enumerate() {
-            let ry = v - ring_at(&cy, poles, fs, n as f64);
+            let ry = v - ring_at(cy, poles, fs, n as f64);
             let r1 = 1.0 - ring_at(&c1, poles, fs, n as f64);
             num += r1 * ry;
             den += r1 * r1;
