@@ -9,3 +9,4 @@ pub mod ratio_table;
 pub mod sampled_fit;
 pub mod sampled_phase;
 pub mod skew_tolerance;
+pub mod skewness;

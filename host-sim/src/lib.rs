@@ -25,7 +25,9 @@ pub mod scene;
 pub mod score;
 pub mod sim;
 
-pub use bridge::{calibrate, convert, kernel_scene, ratio_table, sampled_phase, skew_tolerance};
+pub use bridge::{
+    calibrate, convert, kernel_scene, ratio_table, sampled_phase, skew_tolerance, skewness,
+};
 pub use cli::{
     caving_cli, evaluate_cli, export_cli, impact_cli, paper_cli, plasticity_cli, speed_cli,
     tradeoff_cli,

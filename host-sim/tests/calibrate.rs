@@ -200,3 +200,23 @@ fn the_sampling_correction_follows_the_samples_per_pulse() {
         );
     }
 }
+
+/// The shape check's skewness of two points is a Bernoulli variable's: with weight share `p`
+/// at the later point, `(1 - 2p) / sqrt(p (1 - p))`, whatever their spacing; a third point
+/// mirrored about the middle of three equal ones leaves it 0.
+#[test]
+fn weighted_skewness_is_the_bernoulli_closed_form() {
+    use host_sim::skewness::weighted_skewness;
+    for (v0, v1, dt) in [(1.0f64, 2.0f64, 1.0f64), (3.0, 1.0, 0.25), (0.5, 0.7, 40.0)] {
+        let p = v1 * v1 / (v0 * v0 + v1 * v1);
+        let want = (1.0 - 2.0 * p) / (p * (1.0 - p)).sqrt();
+        let got = weighted_skewness(&[(5.0, v0), (5.0 + dt, v1)]);
+        assert!(
+            (got - want).abs() < 1e-12,
+            "{v0} {v1} {dt}: {got} against {want}"
+        );
+    }
+    assert!(weighted_skewness(&[(0.0, 2.0), (1.0, 5.0), (2.0, 2.0)]).abs() < 1e-12);
+    assert_eq!(weighted_skewness(&[(0.0, 0.0), (1.0, 0.0)]), 0.0);
+    assert_eq!(weighted_skewness(&[(3.0, 1.0)]), 0.0);
+}

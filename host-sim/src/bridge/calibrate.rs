@@ -26,6 +26,7 @@ use crate::bridge::sampled_fit::force_at;
 pub use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
 use crate::bridge::sampled_phase::{Phase64, phase_calibration};
 use crate::bridge::skew_tolerance::{GridImpact, sampled_skew_tolerance};
+use crate::bridge::skewness::weighted_skewness;
 use crate::physics::hertz64::{HERTZ_TC_FACTOR as CONTACT_TIME_FACTOR, HertzImpact64};
 use crate::physics::impact::{ImpactSpec, simulate};
 use crate::physics::integrate::SimError;
@@ -195,24 +196,12 @@ fn top_fraction(series: &[(f64, f64)], duration_s: f64) -> f64 {
 /// `cut` times the peak (as the detector takes the part above its trigger level).
 pub fn skewness(series: &[(f64, f64)], cut: f64) -> f64 {
     let peak = series.iter().fold(0.0f64, |m, p| m.max(p.1));
-    let above = || {
-        series
-            .iter()
-            .filter(|p| p.1 > cut * peak)
-            .map(|p| (p.0, p.1 * p.1))
-    };
-    let m0: f64 = above().map(|p| p.1).sum();
-    if m0 <= 0.0 {
-        return 0.0;
-    }
-    let mu = above().map(|p| p.0 * p.1).sum::<f64>() / m0;
-    let var = above().map(|p| (p.0 - mu).powi(2) * p.1).sum::<f64>() / m0;
-    let third = above().map(|p| (p.0 - mu).powi(3) * p.1).sum::<f64>() / m0;
-    if var > 0.0 {
-        third / var.powf(1.5)
-    } else {
-        0.0
-    }
+    let above: Vec<(f64, f64)> = series
+        .iter()
+        .copied()
+        .filter(|p| p.1 > cut * peak)
+        .collect();
+    weighted_skewness(&above)
 }
 
 /// `series` (`(t_s, force_n)`) sampled every `1 / sample_rate_hz` at phase `k` of 16: from

@@ -17,6 +17,7 @@
 //! skewness (one sigma is `5.1 (noise / F_max) / sqrt(n)`), stays whole for the noise.
 
 use crate::bridge::sampled_fit::force_at;
+use crate::bridge::skewness::weighted_skewness;
 use crate::physics::hertz64::HertzImpact64;
 use crate::physics::impact::ImpactSpec;
 use crate::physics::integrate::SimError;
@@ -254,33 +255,20 @@ fn sampled_excess(p: &Scaled, phase: f64, skew_mean: f64, check: &SkewCheck) -> 
     let dt = 1.0 / check.sample_rate_hz;
     let scale = p.force * check.counts_per_n;
     let length_s = p.shape.length_s() * p.time;
-    let (mut n, mut m) = (0usize, [0.0f64; 4]);
+    let mut above = Vec::new();
     let mut k = 0.0;
     while (k + phase) * dt < length_s {
         let v = scale * p.shape.at((k + phase) * dt / p.time);
         if v > check.trigger_counts {
-            n += 1;
-            let w = v * v;
-            m = [
-                m[0] + w,
-                m[1] + w * k,
-                m[2] + w * k * k,
-                m[3] + w * k * k * k,
-            ];
+            above.push((k, v));
         }
         k += 1.0;
     }
+    let n = above.len();
     if n < CHECKED_FROM {
         return None;
     }
-    let mu = m[1] / m[0];
-    let var = m[2] / m[0] - mu * mu;
-    let third = m[3] / m[0] - 3.0 * mu * (m[2] / m[0]) + 2.0 * mu * mu * mu;
-    let skew = if var > 0.0 {
-        third / var.powf(1.5)
-    } else {
-        0.0
-    };
+    let skew = weighted_skewness(&above);
     let cut = check.trigger_counts / (scale * p.shape.peak_n);
     let allowed = 0.6 / n as f64 + 4.0 * skew_mean.abs() * cut.min(0.25);
     Some((skew - skew_mean).abs() - allowed)
