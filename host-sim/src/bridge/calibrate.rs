@@ -436,8 +436,10 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
     let fs = scene.sensor.sample_rate_hz;
     for (i, class) in scene.classes.iter().enumerate() {
         let (r, u) = (class.radius_m, class.speed_range_m_s());
-        for radius in [r.min, (r.min * r.max).sqrt(), r.max] {
-            for speed in [u.min, 0.5 * (u.min + u.max), u.max] {
+        let radii_m: [f64; GRID_AXIS] = [r.min, (r.min * r.max).sqrt(), r.max];
+        let speeds_m_s: [f64; GRID_AXIS] = [u.min, 0.5 * (u.min + u.max), u.max];
+        for radius in radii_m {
+            for speed in speeds_m_s {
                 let mut spec = ImpactSpec::new(class.material.material(), plate, radius, speed);
                 spec.law = scene.class_law(i)?;
                 let p = pulse_ratios_and_series(&spec)?;
@@ -477,8 +479,12 @@ fn sampled_of_grid(
     (sampled_calibration(&continuous), phase)
 }
 
-/// Impacts per class that [`integrate_grid`] integrates: radius x speed, 3 x 3.
-const GRID_PER_CLASS: usize = 9;
+/// Radii, and speeds, per class that [`integrate_grid`] integrates (its arrays have this
+/// length, so the two cannot disagree).
+const GRID_AXIS: usize = 3;
+
+/// Impacts per class that [`integrate_grid`] integrates: radius x speed.
+const GRID_PER_CLASS: usize = GRID_AXIS * GRID_AXIS;
 
 /// The grid's impacts by class, as [`sampled_skew_tolerance`] takes them: each impact's
 /// series (`all`, in grid order) with its Hertz closed forms (`hertz`).
