@@ -1,0 +1,426 @@
+//! How much of the kernel's noiseless error on a damped pulse of 1.6-5 samples its phase table
+//! leaves, and how much any table over the same coordinates could remove (`docs/few_samples.md`).
+//! One impact of the law (coal, R 0.02 m, u 2 m/s; the restitution laws' pulses are
+//! self-similar) is sampled at 600 samples per pulse `n` (1.6-5, log-spaced; the duration from
+//! the area) and 64 phases, `(j + 0.17) / 64`, fitted with the kernel's three-sample fit, and
+//! corrected
+//!
+//! - by the scene build's phase table (`phase_calibration` of this pulse, at its own 32 phases
+//!   per row), read as the kernel reads it (`n` from the measured duration by two fixed-point
+//!   steps), read at the true `n`, with 20 fixed-point steps, and with `n` by bisection;
+//! - by fine tables (means over the phases `(j + 0.5) / 64`) over `(ln n measured, a)` (bins of
+//!   0.01 x 0.01), over `(ln n measured, before / largest, after / largest)` (0.01 x 0.02 x
+//!   0.02) and over `(true ln n, a)`: what those coordinates allow;
+//! - by coarse tables of several sizes over `(ln n measured, a)` (read bilinearly, with no
+//!   fixed point) and over `(true ln n, a)` (built and read as the scene's table is).
+//!
+//! It prints the root mean square of `ln F_max / ln t_c` each leaves, by band of `n`.
+//!
+//! `cargo run --release -p host-sim --example phase_reach -- [LAW] [E]` (LAW flores,
+//! hunt_crossley, gonthier or tsuji; flores 0.3 by default).
+
+use coalshock::math::Libm;
+use coalshock::shape_fit::five_about;
+use host_sim::bridge::sampled_fit::{ContinuousPulse, force_at};
+use host_sim::bridge::sampled_phase::phase_calibration;
+use host_sim::physics::hertz64::Material64;
+use host_sim::physics::impact::{ImpactSpec, simulate};
+use host_sim::physics::law_spec::LawSpec;
+use std::collections::HashMap;
+
+const C_AREA: f64 = 1.6 / 2.943_275_2;
+const BANDS: [f64; 6] = [1.6, 2.0, 2.5, 3.2, 4.0, 5.0];
+
+fn law(name: &str, e: f64) -> LawSpec {
+    match name {
+        "hunt_crossley" => LawSpec::HuntCrossley { restitution: e },
+        "gonthier" => LawSpec::Gonthier { restitution: e },
+        "tsuji" => LawSpec::Tsuji { restitution: e },
+        _ => LawSpec::Flores { restitution: e },
+    }
+}
+
+/// One fit: true `n`, measured `n`, asymmetry, before / largest, after / largest, errors.
+struct Fit {
+    n: f64,
+    n_meas: f64,
+    a: f64,
+    before: f64,
+    after: f64,
+    err: [f64; 2],
+}
+
+fn fit(series: &[(f64, f64)], peak: f64, duration: f64, n: f64, phase: f64) -> Option<Fit> {
+    let dt = duration / n;
+    let last = series.last()?.0;
+    let mut t = series.first()?.0 + dt * phase;
+    let mut v = Vec::new();
+    while t < last {
+        v.push(force_at(series, t));
+        t += dt;
+    }
+    let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    let sum: f64 = v.iter().sum();
+    let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
+    let top = five_about(&v32, i);
+    let (p, samples) = coalshock::detector::shape_fit::<Libm>(top, sum as f32, false)?;
+    let m = f64::from(top[2]);
+    Some(Fit {
+        n,
+        n_meas: f64::from(samples),
+        a: f64::from(coalshock::sampled_phase::neighbour_asymmetry(
+            top[1], top[2], top[3],
+        )),
+        before: f64::from(top[1]) / m,
+        after: f64::from(top[3]) / m,
+        err: [
+            (f64::from(p) / peak).ln(),
+            (f64::from(samples) * dt / duration).ln(),
+        ],
+    })
+}
+
+fn band(n: f64) -> usize {
+    BANDS.iter().rposition(|&b| n >= b).unwrap_or(0)
+}
+
+/// Root mean square per band of `residuals` `(n, [ln F, ln t])`.
+fn print_rms(name: &str, residuals: &[(f64, [f64; 2])]) {
+    let mut s = vec![[0.0f64; 3]; BANDS.len()];
+    for (n, r) in residuals {
+        let b = band(*n);
+        s[b][0] += r[0] * r[0];
+        s[b][1] += r[1] * r[1];
+        s[b][2] += 1.0;
+    }
+    let cells: Vec<String> = s[..BANDS.len() - 1]
+        .iter()
+        .map(|c| format!("{:.4} / {:.4}", (c[0] / c[2]).sqrt(), (c[1] / c[2]).sqrt()))
+        .collect();
+    println!("| {name} | {} |", cells.join(" | "));
+}
+
+/// Residuals of `test` against the means of `train` in the bins `key` gives.
+fn binned<K: std::hash::Hash + Eq>(
+    train: &[Fit],
+    test: &[Fit],
+    key: impl Fn(&Fit) -> K,
+) -> Vec<(f64, [f64; 2])> {
+    let mut sums: HashMap<K, [f64; 3]> = HashMap::new();
+    for f in train {
+        let e = sums.entry(key(f)).or_insert([0.0; 3]);
+        e[0] += f.err[0];
+        e[1] += f.err[1];
+        e[2] += 1.0;
+    }
+    test.iter()
+        .filter_map(|f| {
+            let s = sums.get(&key(f))?;
+            Some((f.n, [f.err[0] - s[0] / s[2], f.err[1] - s[1] / s[2]]))
+        })
+        .collect()
+}
+
+/// Each cell of `row` the mean of `sums` (`[sum ln F, sum ln t, count]`) at the nearest
+/// column that holds any.
+fn fill_nearest(row: &mut [[f64; 2]], sums: &[[f64; 3]]) {
+    for (c, cell) in row.iter_mut().enumerate() {
+        let filled = (0..sums.len())
+            .filter(|&d| sums[d][2] > 0.0)
+            .min_by_key(|&d| d.abs_diff(c));
+        if let Some(d) = filled {
+            let s = sums[d];
+            *cell = [s[0] / s[2], s[1] / s[2]];
+        }
+    }
+}
+
+/// A table of `rows` rows (`ln n measured` from `ln_first`, step `ln_step`) by `cols`
+/// asymmetry points, means of the nearest training fits, read bilinearly (as
+/// `SampledPhase::at` reads): the residuals of `test`.
+fn coarse(
+    train: &[Fit],
+    test: &[Fit],
+    ln_first: f64,
+    ln_step: f64,
+    rows: usize,
+    cols: usize,
+) -> Vec<(f64, [f64; 2])> {
+    let row_of = |f: &Fit| ((f.n_meas.ln() - ln_first) / ln_step).round();
+    let mut axes = vec![[f64::INFINITY, f64::NEG_INFINITY]; rows];
+    for f in train {
+        let r = row_of(f);
+        if r >= 0.0 && (r as usize) < rows {
+            let ax = &mut axes[r as usize];
+            ax[0] = ax[0].min(f.a);
+            ax[1] = ax[1].max(f.a);
+        }
+    }
+    let col_of = |r: usize, a: f64| {
+        let [lo, hi] = axes[r];
+        let step = (hi - lo) / (cols - 1) as f64;
+        if step > 0.0 {
+            ((a - lo) / step).clamp(0.0, (cols - 1) as f64)
+        } else {
+            0.0
+        }
+    };
+    let mut sums = vec![vec![[0.0f64; 3]; cols]; rows];
+    for f in train {
+        let r = row_of(f);
+        if r >= 0.0 && (r as usize) < rows {
+            let r = r as usize;
+            let c = col_of(r, f.a).round() as usize;
+            sums[r][c][0] += f.err[0];
+            sums[r][c][1] += f.err[1];
+            sums[r][c][2] += 1.0;
+        }
+    }
+    let mut mean = vec![vec![[0.0f64; 2]; cols]; rows];
+    for (row, sums) in mean.iter_mut().zip(&sums) {
+        fill_nearest(row, sums);
+    }
+    let read_row = |r: usize, a: f64| {
+        let pos = col_of(r, a);
+        let i = (pos.floor() as usize).min(cols - 2);
+        let t = pos - i as f64;
+        let (m0, m1) = (mean[r][i], mean[r][i + 1]);
+        [m0[0] + (m1[0] - m0[0]) * t, m0[1] + (m1[1] - m0[1]) * t]
+    };
+    test.iter()
+        .filter_map(|f| {
+            let x = ((f.n_meas.ln() - ln_first) / ln_step).max(0.0);
+            if x > (rows - 1) as f64 {
+                return None;
+            }
+            let i = (x.floor() as usize).min(rows - 2);
+            let t = x - i as f64;
+            let (v0, v1) = (read_row(i, f.a), read_row(i + 1, f.a));
+            let v = [v0[0] + (v1[0] - v0[0]) * t, v0[1] + (v1[1] - v0[1]) * t];
+            Some((f.n, [f.err[0] - v[0], f.err[1] - v[1]]))
+        })
+        .collect()
+}
+
+/// A table of `rows` rows at true `n = 1.6 step^k` by `cols` asymmetry points, each row's
+/// means from the pulse sampled at that `n` and 32 phases (as `phase_calibration` takes
+/// them), read as the kernel reads its table (two fixed-point steps from the measured `n`):
+/// the residuals of `test`.
+#[allow(clippy::too_many_arguments)]
+fn coarse_true(
+    series: &[(f64, f64)],
+    peak: f64,
+    duration: f64,
+    test: &[Fit],
+    step: f64,
+    rows: usize,
+    cols: usize,
+) -> Vec<(f64, [f64; 2])> {
+    let n_of = |k: usize| 1.6 * step.powi(k as i32);
+    let mut axes = vec![[0.0f64; 2]; rows];
+    let mut mean = vec![vec![[0.0f64; 2]; cols]; rows];
+    for k in 0..rows {
+        let fits: Vec<Fit> = (0..32)
+            .filter_map(|j| fit(series, peak, duration, n_of(k), (j as f64 + 0.5) / 32.0))
+            .collect();
+        let lo = fits.iter().map(|f| f.a).fold(f64::INFINITY, f64::min);
+        let hi = fits.iter().map(|f| f.a).fold(f64::NEG_INFINITY, f64::max);
+        axes[k] = [lo, hi];
+        let mut sums = vec![[0.0f64; 3]; cols];
+        let st = (hi - lo) / (cols - 1) as f64;
+        for f in &fits {
+            let c = if st > 0.0 {
+                ((f.a - lo) / st).round() as usize
+            } else {
+                0
+            };
+            sums[c][0] += f.err[0];
+            sums[c][1] += f.err[1];
+            sums[c][2] += 1.0;
+        }
+        fill_nearest(&mut mean[k], &sums);
+    }
+    let at = |ln_n: f64, a: f64| -> Option<[f64; 2]> {
+        let x = ((ln_n - 1.6f64.ln()) / step.ln()).max(0.0);
+        if x > (rows - 1) as f64 {
+            return None;
+        }
+        let i = (x.floor() as usize).min(rows - 2);
+        let t = x - i as f64;
+        let row = |k: usize| {
+            let [lo, hi] = axes[k];
+            let st = (hi - lo) / (cols - 1) as f64;
+            let pos = if st > 0.0 {
+                ((a - lo) / st).clamp(0.0, (cols - 1) as f64)
+            } else {
+                0.0
+            };
+            let j = (pos.floor() as usize).min(cols - 2);
+            let u = pos - j as f64;
+            let (m0, m1) = (mean[k][j], mean[k][j + 1]);
+            [m0[0] + (m1[0] - m0[0]) * u, m0[1] + (m1[1] - m0[1]) * u]
+        };
+        let (v0, v1) = (row(i), row(i + 1));
+        Some([v0[0] + (v1[0] - v0[0]) * t, v0[1] + (v1[1] - v0[1]) * t])
+    };
+    test.iter()
+        .filter_map(|f| {
+            let ln_meas = f.n_meas.ln();
+            let mut ln_n = ln_meas;
+            for _ in 0..2 {
+                ln_n = ln_meas - at(ln_n, f.a)?[1];
+            }
+            let v = at(ln_n, f.a)?;
+            Some((f.n, [f.err[0] - v[0], f.err[1] - v[1]]))
+        })
+        .collect()
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let name = args.get(1).map_or("flores", |s| s.as_str());
+    let e: f64 = args.get(2).map_or(0.3, |s| s.parse().expect("E"));
+    let mut spec = ImpactSpec::new(Material64::COAL, Material64::CARBON_STEEL, 0.02, 2.0);
+    spec.law = law(name, e);
+    let hertz_s = spec.hertz().expect("an impact").duration_s;
+    spec.record = Some(hertz_s / 8000.0);
+    let series = simulate(&spec)
+        .expect("an impact")
+        .force_series
+        .unwrap_or_default();
+    let (mut area, mut peak) = (0.0, 0.0f64);
+    for w in series.windows(2) {
+        area += 0.5 * (w[1].0 - w[0].0) * (w[0].1.max(0.0) + w[1].1.max(0.0));
+        peak = peak.max(w[1].1);
+    }
+    let duration = area / (C_AREA * peak);
+    let pulse = ContinuousPulse {
+        series: &series,
+        peak_n: peak,
+        duration_s: duration,
+    };
+    let table = phase_calibration(std::slice::from_ref(&pulse)).to_kernel();
+    let ns: Vec<f64> = (0..600)
+        .map(|i| 1.6 * (5.0f64 / 1.6).powf(i as f64 / 599.0))
+        .collect();
+    let fits = |offset: f64| -> Vec<Fit> {
+        ns.iter()
+            .flat_map(|&n| (0..64).map(move |j| (n, (j as f64 + offset) / 64.0)))
+            .filter_map(|(n, ph)| fit(&series, peak, duration, n, ph))
+            .collect()
+    };
+    let (train, test) = (fits(0.5), fits(0.17));
+    let kernel: Vec<(f64, [f64; 2])> = test
+        .iter()
+        .filter_map(|f| {
+            let ln_meas = f.n_meas.ln() as f32;
+            let mut ln_n = ln_meas;
+            for _ in 0..2 {
+                ln_n = ln_meas - table.at(ln_n, f.a as f32)?.1;
+            }
+            let (lf, lt, _, _) = table.at(ln_n, f.a as f32)?;
+            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
+        })
+        .collect();
+    let at_true: Vec<(f64, [f64; 2])> = test
+        .iter()
+        .filter_map(|f| {
+            let (lf, lt, _, _) = table.at(f.n.ln() as f32, f.a as f32)?;
+            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
+        })
+        .collect();
+    let one_step: Vec<(f64, [f64; 2])> = test
+        .iter()
+        .filter_map(|f| {
+            let ln_meas = f.n_meas.ln() as f32;
+            let mut ln_n = ln_meas;
+            for _ in 0..20 {
+                ln_n = ln_meas - table.at(ln_n, f.a as f32)?.1;
+            }
+            let (lf, lt, _, _) = table.at(ln_n, f.a as f32)?;
+            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
+        })
+        .collect();
+    let bisected: Vec<(f64, [f64; 2])> = test
+        .iter()
+        .filter_map(|f| {
+            let ln_meas = f.n_meas.ln() as f32;
+            let h = |x: f32| table.at(x, f.a as f32).map(|v| x + v.1 - ln_meas);
+            let (mut lo, mut hi) = (1.6f32.ln(), 11.9f32.ln());
+            if h(lo)? > 0.0 {
+                hi = lo;
+            }
+            for _ in 0..30 {
+                let mid = 0.5 * (lo + hi);
+                if h(mid)? > 0.0 { hi = mid } else { lo = mid }
+            }
+            let (lf, lt, _, _) = table.at(0.5 * (lo + hi), f.a as f32)?;
+            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
+        })
+        .collect();
+    println!(
+        "{name} e {e}: rms of ln F_max / ln t_c left, noiseless, by samples per pulse (duration from the area)"
+    );
+    println!("| correction | 1.6-2 | 2-2.5 | 2.5-3.2 | 3.2-4 | 4-5 |");
+    println!("|---|---|---|---|---|---|");
+    print_rms(
+        "none (the fit's own error)",
+        &test.iter().map(|f| (f.n, f.err)).collect::<Vec<_>>(),
+    );
+    print_rms(
+        "the scene's phase table, read as the kernel reads it",
+        &kernel,
+    );
+    print_rms("the scene's phase table, read at the true n", &at_true);
+    print_rms("the scene's phase table, 20 fixed-point steps", &one_step);
+    print_rms("the scene's phase table, n by bisection", &bisected);
+    let q = |x: f64, w: f64| (x / w).round() as i64;
+    print_rms(
+        "fine table over (ln n measured, a)",
+        &binned(&train, &test, |f| (q(f.n_meas.ln(), 0.01), q(f.a, 0.01))),
+    );
+    print_rms(
+        "fine table over (ln n measured, before, after)",
+        &binned(&train, &test, |f| {
+            (q(f.n_meas.ln(), 0.01), q(f.before, 0.02), q(f.after, 0.02))
+        }),
+    );
+    let low = test
+        .iter()
+        .filter(|f| f.n < 1.65)
+        .map(|f| f.n_meas)
+        .fold(f64::INFINITY, f64::min);
+    println!("(smallest measured n at true n 1.6-1.65: {low:.3})");
+    for (rows, step, cols) in [
+        (10, 1.25f64, 8),
+        (10, 1.25, 16),
+        (16, 1.15, 8),
+        (20, 1.12, 8),
+        (20, 1.12, 16),
+    ] {
+        print_rms(
+            &format!(
+                "{rows} x {cols} table over (ln n measured, a), rows {step} apart from {low:.2}"
+            ),
+            &coarse(&train, &test, low.ln(), step.ln(), rows, cols),
+        );
+    }
+    for (rows, step, cols) in [
+        (10, 1.25f64, 8),
+        (10, 1.25, 16),
+        (19, 1.12, 8),
+        (19, 1.12, 16),
+        (37, 1.06, 32),
+    ] {
+        print_rms(
+            &format!(
+                "{rows} x {cols} table over (true ln n, a), rows {step} apart, read as the kernel reads"
+            ),
+            &coarse_true(&series, peak, duration, &test, step, rows, cols),
+        );
+    }
+    print_rms(
+        "fine table over (true ln n, a)",
+        &binned(&train, &test, |f| (q(f.n.ln(), 0.01), q(f.a, 0.01))),
+    );
+}
