@@ -11,8 +11,10 @@
 //! - by fine tables (means over the phases `(j + 0.5) / 64`) over `(ln n measured, a)` (bins of
 //!   0.01 x 0.01), over `(ln n measured, before / largest, after / largest)` (0.01 x 0.02 x
 //!   0.02) and over `(true ln n, a)`: what those coordinates allow;
-//! - by coarse tables of several sizes over `(ln n measured, a)` (read bilinearly, with no
-//!   fixed point) and over `(true ln n, a)` (built and read as the scene's table is).
+//! - by coarse tables of several sizes over `(ln n measured, a)`, read bilinearly with no
+//!   fixed point, their cells the means of the nearest fits or the least-squares fit of the
+//!   bilinear reading to all of them, and over `(true ln n, a)` (built and read as the
+//!   scene's table is).
 //!
 //! It prints the root mean square of `ln F_max / ln t_c` each leaves, by band of `n`.
 //!
@@ -276,6 +278,137 @@ fn coarse_true(
         .collect()
 }
 
+/// A `rows x cols` table over `(ln n measured, a)` (rows from `ln_first`, `ln_step` apart; each
+/// row's asymmetry axis the range of the training fits within a row step of it) whose node
+/// values are the least-squares fit of the bilinear reading to the training fits (with a weak
+/// penalty on neighbours' differences where fits are few): the residuals of `test`.
+fn least_squares_measured(
+    train: &[Fit],
+    test: &[Fit],
+    ln_first: f64,
+    ln_step: f64,
+    rows: usize,
+    cols: usize,
+) -> Vec<(f64, [f64; 2])> {
+    let x_of = |f: &Fit| (f.n_meas.ln() - ln_first) / ln_step;
+    let mut axes = vec![[f64::INFINITY, f64::NEG_INFINITY]; rows];
+    for f in train {
+        let x = x_of(f);
+        for (k, ax) in axes.iter_mut().enumerate() {
+            if (x - k as f64).abs() <= 1.0 {
+                ax[0] = ax[0].min(f.a);
+                ax[1] = ax[1].max(f.a);
+            }
+        }
+    }
+    // The nodes and weights of the bilinear reading at (x, a).
+    let weights = |x: f64, a: f64| -> Option<Vec<(usize, f64)>> {
+        if !(0.0..=(rows - 1) as f64).contains(&x) {
+            return None;
+        }
+        let i = (x.floor() as usize).min(rows - 2);
+        let t = x - i as f64;
+        let mut w = Vec::with_capacity(4);
+        for (k, wk) in [(i, 1.0 - t), (i + 1, t)] {
+            let [lo, hi] = axes[k];
+            let st = (hi - lo) / (cols - 1) as f64;
+            let pos = if st > 0.0 {
+                ((a - lo) / st).clamp(0.0, (cols - 1) as f64)
+            } else {
+                0.0
+            };
+            let j = (pos.floor() as usize).min(cols - 2);
+            let u = pos - j as f64;
+            w.push((k * cols + j, wk * (1.0 - u)));
+            w.push((k * cols + j + 1, wk * u));
+        }
+        Some(w)
+    };
+    let m = rows * cols;
+    let mut ata = vec![vec![0.0f64; m]; m];
+    let mut aty = vec![[0.0f64; 2]; m];
+    for f in train {
+        let Some(w) = weights(x_of(f), f.a) else {
+            continue;
+        };
+        for &(p, wp) in &w {
+            aty[p][0] += wp * f.err[0];
+            aty[p][1] += wp * f.err[1];
+            for &(q, wq) in &w {
+                ata[p][q] += wp * wq;
+            }
+        }
+    }
+    let lambda = 1e-3;
+    for k in 0..rows {
+        for j in 0..cols {
+            let p = k * cols + j;
+            for q in [
+                (j + 1 < cols).then(|| p + 1),
+                (k + 1 < rows).then(|| p + cols),
+            ]
+            .into_iter()
+            .flatten()
+            {
+                ata[p][p] += lambda;
+                ata[q][q] += lambda;
+                ata[p][q] -= lambda;
+                ata[q][p] -= lambda;
+            }
+        }
+    }
+    let v = solve(ata, aty);
+    test.iter()
+        .filter_map(|f| {
+            let w = weights(x_of(f), f.a)?;
+            let mut e = f.err;
+            for (p, wp) in w {
+                e[0] -= wp * v[p][0];
+                e[1] -= wp * v[p][1];
+            }
+            Some((f.n, e))
+        })
+        .collect()
+}
+
+/// `a x = b` (two right-hand sides) by Gaussian elimination with partial pivoting.
+fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    let n = b.len();
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
+            .unwrap_or(c);
+        a.swap(c, p);
+        b.swap(c, p);
+        let d = a[c][c];
+        if d.abs() < 1e-300 {
+            continue;
+        }
+        for r in c + 1..n {
+            let f = a[r][c] / d;
+            if f != 0.0 {
+                let (top, rest) = a.split_at_mut(r);
+                for (x, y) in rest[0][c..].iter_mut().zip(&top[c][c..]) {
+                    *x -= f * y;
+                }
+                let bc = b[c];
+                b[r][0] -= f * bc[0];
+                b[r][1] -= f * bc[1];
+            }
+        }
+    }
+    let mut x = vec![[0.0f64; 2]; n];
+    for c in (0..n).rev() {
+        let mut s = b[c];
+        for k in c + 1..n {
+            s[0] -= a[c][k] * x[k][0];
+            s[1] -= a[c][k] * x[k][1];
+        }
+        x[c] = [s[0] / a[c][c], s[1] / a[c][c]];
+    }
+    x
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let name = args.get(1).map_or("flores", |s| s.as_str());
@@ -403,6 +536,19 @@ fn main() {
                 "{rows} x {cols} table over (ln n measured, a), rows {step} apart from {low:.2}"
             ),
             &coarse(&train, &test, low.ln(), step.ln(), rows, cols),
+        );
+    }
+    for (rows, step, cols) in [
+        (10, 1.25f64, 8),
+        (10, 1.25, 16),
+        (20, 1.12, 8),
+        (20, 1.12, 16),
+    ] {
+        print_rms(
+            &format!(
+                "{rows} x {cols} least-squares table over (ln n measured, a), rows {step} apart from {low:.2}"
+            ),
+            &least_squares_measured(&train, &test, low.ln(), step.ln(), rows, cols),
         );
     }
     for (rows, step, cols) in [
