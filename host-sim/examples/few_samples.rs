@@ -19,7 +19,9 @@
 //! and then the forced-choice accuracy on the same impacts of the kernel, of the Bayes
 //! decision (`host_sim::score::bayes::decide`) on the fit's features at the fit's own spread
 //! in the band of its estimated `n` (taken over the same impacts), and of the same decision on
-//! the exact features plus one Gaussian draw at the bound (own phase, and four phases).
+//! the exact features plus one Gaussian draw at the bound (own phase, and four phases), and of
+//! the same decision on the kernel's features at their own spread in the band of the true `n`
+//! (how much of the kernel's loss is its measurement rather than its classifier).
 //!
 //! `cargo run --release -p host-sim --example few_samples -- SCENE LAW E RATE_HZ NOISE_COUNTS
 //! [N] [SEED]`: the scene file with its contact law (flores, hunt_crossley,
@@ -372,14 +374,23 @@ fn print_errors(scene: &host_sim::scene::SceneFile, rows: &[Row]) {
     }
 }
 
-/// The fit's own spread per band: the noise its Bayes decision takes.
-fn ml_noise(rows: &[Row]) -> BTreeMap<usize, FeatureNoise> {
+/// The spread of the errors `err` gives, per band `band` gives: the noise a Bayes decision on
+/// those errors' features takes.
+fn band_noise(
+    rows: &[Row],
+    err: impl Fn(&Row) -> Option<[f64; 2]>,
+    band: impl Fn(&Row) -> usize,
+) -> BTreeMap<usize, FeatureNoise> {
     let mut out = BTreeMap::new();
     for b in 0..BANDS.len() {
-        let rs: Vec<&Row> = rows.iter().filter(|r| r.ml_band == b).collect();
-        let (sf, _) = rms(rs.iter().map(|r| r.ml[0]));
-        let (st, _) = rms(rs.iter().map(|r| r.ml[1]));
-        let cov = rs.iter().map(|r| r.ml[0] * r.ml[1]).sum::<f64>() / rs.len().max(1) as f64;
+        let es: Vec<[f64; 2]> = rows
+            .iter()
+            .filter(|r| band(r) == b)
+            .filter_map(&err)
+            .collect();
+        let (sf, _) = rms(es.iter().map(|e| e[0]));
+        let (st, _) = rms(es.iter().map(|e| e[1]));
+        let cov = es.iter().map(|e| e[0] * e[1]).sum::<f64>() / es.len().max(1) as f64;
         let corr = if sf > 0.0 && st > 0.0 {
             (cov / (sf * st)).clamp(-0.99, 0.99)
         } else {
@@ -399,12 +410,13 @@ fn ml_noise(rows: &[Row]) -> BTreeMap<usize, FeatureNoise> {
 
 fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
     let models = class_models(scene);
-    let noise = ml_noise(rows);
+    let noise = band_noise(rows, |r| Some(r.ml), |r| r.ml_band);
+    let kernel_noise = band_noise(rows, |r| r.kernel, |r| r.band);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let priors: Vec<f64> = scene.classes.iter().map(|c| c.prior).collect();
     let total: f64 = priors.iter().sum();
     let all = BANDS.len();
-    let mut right = vec![[0.0f64; 4]; all + 1];
+    let mut right = vec![[0.0f64; 5]; all + 1];
     let mut count = vec![[0.0f64; 1]; all + 1];
     for r in rows {
         let w = priors[r.class] / total;
@@ -414,6 +426,10 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
         count[bi][0] += w;
         count[all][0] += w;
         let kernel = r.kernel_forced == Some(r.class);
+        let kernel_bayes = r.kernel.is_some_and(|e| {
+            let nz = kernel_noise[&r.band];
+            decide(&models, r.hertz[0] + e[0], r.hertz[1] + e[1], Some(&nz)) == r.class
+        });
         let nz = noise[&r.ml_band];
         let ml = decide(
             &models,
@@ -437,7 +453,7 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
         };
         let own = crb_draw(r.crb_own);
         let avg = crb_draw(r.crb_avg);
-        for (j, ok) in [kernel, ml, own, avg].into_iter().enumerate() {
+        for (j, ok) in [kernel, ml, own, avg, kernel_bayes].into_iter().enumerate() {
             if ok {
                 right[bi][j] += w;
                 right[all][j] += w;
@@ -446,9 +462,9 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
     }
     println!();
     println!(
-        "| samples per pulse | share of impacts | kernel forced choice | Bayes on the ML fit | Bayes at the CRB, own phase | Bayes at the CRB, phase-averaged |"
+        "| samples per pulse | share of impacts | kernel forced choice | Bayes on the ML fit | Bayes at the CRB, own phase | Bayes at the CRB, phase-averaged | Bayes on the kernel's features |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     for b in 0..=all {
         if count[b][0] == 0.0 {
             continue;
@@ -464,12 +480,13 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
         };
         let c = count[b][0];
         println!(
-            "| {name} | {:.1} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
+            "| {name} | {:.1} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
             100.0 * c,
             100.0 * right[b][0] / c,
             100.0 * right[b][1] / c,
             100.0 * right[b][2] / c,
-            100.0 * right[b][3] / c
+            100.0 * right[b][3] / c,
+            100.0 * right[b][4] / c
         );
     }
 }
