@@ -21,7 +21,9 @@
 //! in the band of its estimated `n` (taken over the same impacts), and of the same decision on
 //! the exact features plus one Gaussian draw at the bound (own phase, and four phases), and of
 //! the same decision on the kernel's features at their own spread in the band of the true `n`
-//! (how much of the kernel's loss is its measurement rather than its classifier).
+//! (how much of the kernel's loss is its measurement rather than its classifier), and once more
+//! with the kernel's phase table read at the pulse's true `n` instead of the `n` the kernel
+//! infers from the measured duration (how much of it is that inference).
 //!
 //! `cargo run --release -p host-sim --example few_samples -- SCENE LAW E RATE_HZ NOISE_COUNTS
 //! [N] [SEED]`: the scene file with its contact law (flores, hunt_crossley,
@@ -186,6 +188,7 @@ struct Row {
     class: usize,
     band: usize,
     kernel: Option<[f64; 2]>,
+    kernel_true_n: Option<[f64; 2]>,
     kernel_sigma: [f64; 2],
     kernel_forced: Option<usize>,
     ml: [f64; 2],
@@ -237,6 +240,16 @@ fn rows_of(scene: &host_sim::scene::SceneFile, stream: &Stream, n: usize) -> Vec
                     f64::from(h.duration_s).ln() - lt,
                 ]);
                 row.kernel_sigma = [h.sigma_ln_force.into(), h.sigma_ln_duration.into()];
+                let c = &kscene.settings().contact;
+                let ln_n = (n_area as f32).ln();
+                row.kernel_true_n = kscene.settings().sampled_phase.at(ln_n, m.asymmetry).map(
+                    |(lf_c, lt_c, _, _)| {
+                        [
+                            f64::from(m.peak_force_n / (c.force_ratio * lf_c.exp())).ln() - lf,
+                            f64::from(m.duration_s / (c.duration_ratio * lt_c.exp())).ln() - lt,
+                        ]
+                    },
+                );
             }
         }
         // The noisy samples about the largest noiseless one.
@@ -412,11 +425,12 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
     let models = class_models(scene);
     let noise = band_noise(rows, |r| Some(r.ml), |r| r.ml_band);
     let kernel_noise = band_noise(rows, |r| r.kernel, |r| r.band);
+    let true_n_noise = band_noise(rows, |r| r.kernel_true_n, |r| r.band);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let priors: Vec<f64> = scene.classes.iter().map(|c| c.prior).collect();
     let total: f64 = priors.iter().sum();
     let all = BANDS.len();
-    let mut right = vec![[0.0f64; 5]; all + 1];
+    let mut right = vec![[0.0f64; 6]; all + 1];
     let mut count = vec![[0.0f64; 1]; all + 1];
     for r in rows {
         let w = priors[r.class] / total;
@@ -428,6 +442,10 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
         let kernel = r.kernel_forced == Some(r.class);
         let kernel_bayes = r.kernel.is_some_and(|e| {
             let nz = kernel_noise[&r.band];
+            decide(&models, r.hertz[0] + e[0], r.hertz[1] + e[1], Some(&nz)) == r.class
+        });
+        let true_n_bayes = r.kernel_true_n.is_some_and(|e| {
+            let nz = true_n_noise[&r.band];
             decide(&models, r.hertz[0] + e[0], r.hertz[1] + e[1], Some(&nz)) == r.class
         });
         let nz = noise[&r.ml_band];
@@ -453,7 +471,10 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
         };
         let own = crb_draw(r.crb_own);
         let avg = crb_draw(r.crb_avg);
-        for (j, ok) in [kernel, ml, own, avg, kernel_bayes].into_iter().enumerate() {
+        for (j, ok) in [kernel, ml, own, avg, kernel_bayes, true_n_bayes]
+            .into_iter()
+            .enumerate()
+        {
             if ok {
                 right[bi][j] += w;
                 right[all][j] += w;
@@ -462,9 +483,9 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
     }
     println!();
     println!(
-        "| samples per pulse | share of impacts | kernel forced choice | Bayes on the ML fit | Bayes at the CRB, own phase | Bayes at the CRB, phase-averaged | Bayes on the kernel's features |"
+        "| samples per pulse | share of impacts | kernel forced choice | Bayes on the ML fit | Bayes at the CRB, own phase | Bayes at the CRB, phase-averaged | Bayes on the kernel's features | same, its table read at the true n |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     for b in 0..=all {
         if count[b][0] == 0.0 {
             continue;
@@ -480,13 +501,14 @@ fn print_accuracy(scene: &host_sim::scene::SceneFile, rows: &[Row], seed: u64) {
         };
         let c = count[b][0];
         println!(
-            "| {name} | {:.1} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
+            "| {name} | {:.1} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % | {:.2} % |",
             100.0 * c,
             100.0 * right[b][0] / c,
             100.0 * right[b][1] / c,
             100.0 * right[b][2] / c,
             100.0 * right[b][3] / c,
-            100.0 * right[b][4] / c
+            100.0 * right[b][4] / c,
+            100.0 * right[b][5] / c
         );
     }
 }
