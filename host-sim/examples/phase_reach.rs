@@ -7,7 +7,9 @@
 //!
 //! - by the scene build's phase table (`phase_calibration` of this pulse, at its own 32 phases
 //!   per row), read as the kernel reads it (`n` from the measured duration by two fixed-point
-//!   steps), read at the true `n`, with 20 fixed-point steps, and with `n` by bisection;
+//!   steps), read at the true `n`, with 20 fixed-point steps, with `n` by bisection, and at the
+//!   `n` the sums of the samples and of their squares give, `(sum v)^2 / sum v^2` over its
+//!   continuous value per duration (with that `n`'s own error beside the measured duration's);
 //! - by fine tables (means over the phases `(j + 0.5) / 64`) over `(ln n measured, a)` (bins of
 //!   0.01 x 0.01), over `(ln n measured, before / largest, after / largest)` (0.01 x 0.02 x
 //!   0.02) and over `(true ln n, a)`: what those coordinates allow;
@@ -50,6 +52,9 @@ struct Fit {
     before: f64,
     after: f64,
     err: [f64; 2],
+    /// `(sum v)^2 / sum v^2`: the duration in samples the area and the energy give, over its
+    /// continuous constant.
+    area_energy: f64,
 }
 
 fn fit(series: &[(f64, f64)], peak: f64, duration: f64, n: f64, phase: f64) -> Option<Fit> {
@@ -63,6 +68,7 @@ fn fit(series: &[(f64, f64)], peak: f64, duration: f64, n: f64, phase: f64) -> O
     }
     let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
+    let sum_sq: f64 = v.iter().map(|x| x * x).sum();
     let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
     let top = five_about(&v32, i);
     let (p, samples) = coalshock::detector::shape_fit::<Libm>(top, sum as f32, false)?;
@@ -79,6 +85,7 @@ fn fit(series: &[(f64, f64)], peak: f64, duration: f64, n: f64, phase: f64) -> O
             (f64::from(p) / peak).ln(),
             (f64::from(samples) * dt / duration).ln(),
         ],
+        area_energy: sum * sum / sum_sq,
     })
 }
 
@@ -455,6 +462,29 @@ fn main() {
             Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
         })
         .collect();
+    // The continuous pulse's (integral F)^2 / (integral F^2) over its duration from the area.
+    let (mut e2, mut a1) = (0.0, 0.0);
+    for w in series.windows(2) {
+        let h = w[1].0 - w[0].0;
+        a1 += 0.5 * h * (w[0].1 + w[1].1);
+        e2 += 0.5 * h * (w[0].1 * w[0].1 + w[1].1 * w[1].1);
+    }
+    let ae_per_duration = a1 * a1 / e2 / duration;
+    let at_area_energy: Vec<(f64, [f64; 2])> = test
+        .iter()
+        .filter_map(|f| {
+            let ln_n = (f.area_energy / ae_per_duration).ln() as f32;
+            let (lf, lt, _, _) = table.at(ln_n, f.a as f32)?;
+            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
+        })
+        .collect();
+    let n_error: Vec<(f64, [f64; 2])> = test
+        .iter()
+        .map(|f| {
+            let e = (f.area_energy / ae_per_duration / f.n).ln();
+            (f.n, [e, (f.n_meas / f.n).ln()])
+        })
+        .collect();
     let at_true: Vec<(f64, [f64; 2])> = test
         .iter()
         .filter_map(|f| {
@@ -505,6 +535,14 @@ fn main() {
         &kernel,
     );
     print_rms("the scene's phase table, read at the true n", &at_true);
+    print_rms(
+        "the scene's phase table, read at n from the area and the energy",
+        &at_area_energy,
+    );
+    print_rms(
+        "error of ln n from the area and the energy / of the measured duration",
+        &n_error,
+    );
     print_rms("the scene's phase table, 20 fixed-point steps", &one_step);
     print_rms("the scene's phase table, n by bisection", &bisected);
     let q = |x: f64, w: f64| (x / w).round() as i64;
