@@ -25,7 +25,7 @@
 
 use coalshock::math::Libm;
 use coalshock::shape_fit::five_about;
-use host_sim::bridge::sampled_fit::{ContinuousPulse, force_at};
+use host_sim::bridge::sampled_fit::{ContinuousPulse, sample_series};
 use host_sim::bridge::sampled_phase::phase_calibration;
 use host_sim::physics::hertz64::Material64;
 use host_sim::physics::impact::{ImpactSpec, simulate};
@@ -59,13 +59,7 @@ struct Fit {
 
 fn fit(series: &[(f64, f64)], peak: f64, duration: f64, n: f64, phase: f64) -> Option<Fit> {
     let dt = duration / n;
-    let last = series.last()?.0;
-    let mut t = series.first()?.0 + dt * phase;
-    let mut v = Vec::new();
-    while t < last {
-        v.push(force_at(series, t));
-        t += dt;
-    }
+    let v = sample_series(series, dt, phase)?;
     let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
     let sum_sq: f64 = v.iter().map(|x| x * x).sum();

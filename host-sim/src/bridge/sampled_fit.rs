@@ -19,10 +19,9 @@ pub struct ContinuousPulse<'a> {
     pub duration_s: f64,
 }
 
-/// The kernel's fit of `series` sampled every `dt` from `phase * dt` after its start
-/// (`0 <= phase < 1`): peak (N), duration (samples) and the neighbour asymmetry the detector
-/// reports (`coalshock::sampled_phase::neighbour_asymmetry`).
-pub fn fit_sampled_at(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<(f64, f64, f64)> {
+/// `series` (`(t_s, force_n)`) sampled every `dt` (s) from `phase * dt` after its start while
+/// before its end (N); `None` for an empty series.
+pub fn sample_series(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<Vec<f64>> {
     let last = series.last()?.0;
     let mut t = series.first()?.0 + dt * phase;
     let mut v = Vec::new();
@@ -30,6 +29,14 @@ pub fn fit_sampled_at(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<(f64
         v.push(force_at(series, t));
         t += dt;
     }
+    Some(v)
+}
+
+/// The kernel's fit of `series` sampled every `dt` from `phase * dt` after its start
+/// (`0 <= phase < 1`): peak (N), duration (samples) and the neighbour asymmetry the detector
+/// reports (`coalshock::sampled_phase::neighbour_asymmetry`).
+pub fn fit_sampled_at(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<(f64, f64, f64)> {
+    let v = sample_series(series, dt, phase)?;
     let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
     let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
