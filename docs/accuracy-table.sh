@@ -6,7 +6,7 @@ set -euo pipefail
 n=${1:-5000}
 seed=${2:-1}
 cargo build --release -q -p host-sim
-bin=target/release/host-sim
+bin=${CARGO_TARGET_DIR:-target}/release/host-sim
 row() { # scene, label
     "$bin" evaluate --scene "scenes/$1.toml" --n "$n" --seed "$seed" --json 2>/dev/null |
         python3 -c '

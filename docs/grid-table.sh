@@ -24,7 +24,7 @@ jobs=${3:-2}
 laws=${4:-hunt_crossley,lankarani_nikravesh,flores,gonthier,tsuji}
 cargo build --release -q -p host-sim
 cargo build --release -q -p host-sim --example sampled_phase
-bin=$PWD/target/release/host-sim
+bin=$(realpath "${CARGO_TARGET_DIR:-target}")/release/host-sim
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
@@ -156,7 +156,7 @@ EOF
     for law in "flores 0.5" "flores 0.3" "gonthier 0.3" "hunt_crossley 0.3" "tsuji 0.4"; do
         echo
         # shellcheck disable=SC2086
-        target/release/examples/sampled_phase $law
+        "${CARGO_TARGET_DIR:-target}"/release/examples/sampled_phase $law
     done
 } >> docs/grid.md
 echo "wrote docs/grid.md" >&2

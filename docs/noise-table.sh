@@ -11,7 +11,7 @@ set -euo pipefail
 source docs/chain-scenes.sh
 n=${1:-5000}
 cargo build --release -q -p host-sim
-bin=target/release/host-sim
+bin=${CARGO_TARGET_DIR:-target}/release/host-sim
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 row() { # label, scene file, flags...

@@ -5,7 +5,7 @@
 set -euo pipefail
 n=${1:-5000}
 cargo build --release -q -p host-sim
-bin=target/release/host-sim
+bin=${CARGO_TARGET_DIR:-target}/release/host-sim
 row() { # label, scene file, seed
     "$bin" evaluate --scene "$2" --n "$n" --seed "$3" --json 2>/dev/null | python3 -c '
 import json, sys
