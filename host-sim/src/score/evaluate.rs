@@ -389,6 +389,10 @@ pub struct Evaluation {
     pub kernel_bayes_error: f64,
     /// Oracle accuracy on the same draws (exact Hertz features, no noise).
     pub oracle_accuracy: f64,
+    /// Whether any class yields: then the oracle and the other diagnostics on elastic Hertz
+    /// features describe a physics the scene does not have, and only the reference limit is
+    /// its limit.
+    pub yields: bool,
     /// The Bayes decision on the kernel's measured features of the same pulses.
     pub bayes_on_measured_accuracy: f64,
     /// The same with the mean bias removed from the measurement first.
@@ -879,6 +883,7 @@ fn assemble<M: Backend>(
         seed: opts.seed,
         impacts_per_stream: opts.impacts_per_stream,
         match_tolerance_samples: tolerance,
+        yields: scene.yields(),
         columns: names.chain(extra).collect(),
         forced_choice_accuracy,
         forced_choice_std_error,
@@ -1315,6 +1320,13 @@ impl Evaluation {
     /// The f64 diagnostics at the kernel's measured noise.
     fn diagnostics_text(&self, s: &mut String) {
         let _ = writeln!(s, "\ndiagnostics (f64, at the kernel's measured noise)");
+        if self.yields {
+            let _ = writeln!(
+                s,
+                "  (on the elastic Hertz features: this scene's classes yield, so these figures \
+                 are not its physics; its limit is the reference limit above)"
+            );
+        }
         let _ = writeln!(
             s,
             "  Bayes at the kernel's noise {} +- {:.3} % ({} draws)",
@@ -1343,6 +1355,12 @@ impl Evaluation {
     /// The paired losses on the same impacts.
     fn paired_loss_text(&self, s: &mut String) {
         let _ = writeln!(s, "\npaired losses (same impacts)");
+        if self.yields {
+            let _ = writeln!(
+                s,
+                "  (on the elastic Hertz features, as the diagnostics above)"
+            );
+        }
         let paired = |s: &mut String, what: &str, p: &Paired| {
             let _ = writeln!(
                 s,
