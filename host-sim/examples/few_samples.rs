@@ -313,15 +313,10 @@ fn rms(v: impl Iterator<Item = f64>) -> (f64, usize) {
     ((s / n.max(1) as f64).sqrt(), n)
 }
 
-/// The contact law `name` at restitution `e`.
+/// The restitution-parametrised law `name` (as a scene file names it) at restitution `e`.
 fn law(name: &str, e: f64) -> LawSpec {
-    match name {
-        "hunt_crossley" => LawSpec::HuntCrossley { restitution: e },
-        "lankarani_nikravesh" => LawSpec::LankaraniNikravesh { restitution: e },
-        "gonthier" => LawSpec::Gonthier { restitution: e },
-        "tsuji" => LawSpec::Tsuji { restitution: e },
-        _ => LawSpec::Flores { restitution: e },
-    }
+    LawSpec::restitution_law(name, e)
+        .expect("LAW: hunt_crossley, lankarani_nikravesh, flores, gonthier or tsuji")
 }
 
 fn main() {

@@ -25,6 +25,7 @@
 
 use coalshock::math::Libm;
 use coalshock::shape_fit::five_about;
+use host_sim::bridge::calibrate::{C_AREA, area_energy_peak};
 use host_sim::bridge::sampled_fit::{ContinuousPulse, sample_series};
 use host_sim::bridge::sampled_phase::phase_calibration;
 use host_sim::physics::hertz64::Material64;
@@ -32,16 +33,12 @@ use host_sim::physics::impact::{ImpactSpec, simulate};
 use host_sim::physics::law_spec::LawSpec;
 use std::collections::HashMap;
 
-const C_AREA: f64 = 1.6 / 2.943_275_2;
 const BANDS: [f64; 6] = [1.6, 2.0, 2.5, 3.2, 4.0, 5.0];
 
+/// The restitution-parametrised law `name` (as a scene file names it) at restitution `e`.
 fn law(name: &str, e: f64) -> LawSpec {
-    match name {
-        "hunt_crossley" => LawSpec::HuntCrossley { restitution: e },
-        "gonthier" => LawSpec::Gonthier { restitution: e },
-        "tsuji" => LawSpec::Tsuji { restitution: e },
-        _ => LawSpec::Flores { restitution: e },
-    }
+    LawSpec::restitution_law(name, e)
+        .expect("LAW: hunt_crossley, lankarani_nikravesh, flores, gonthier or tsuji")
 }
 
 /// One fit: true `n`, measured `n`, asymmetry, before / largest, after / largest, errors.
@@ -422,11 +419,7 @@ fn main() {
         .expect("an impact")
         .force_series
         .unwrap_or_default();
-    let (mut area, mut peak) = (0.0, 0.0f64);
-    for w in series.windows(2) {
-        area += 0.5 * (w[1].0 - w[0].0) * (w[0].1.max(0.0) + w[1].1.max(0.0));
-        peak = peak.max(w[1].1);
-    }
+    let (area, _, peak) = area_energy_peak(&series);
     let duration = area / (C_AREA * peak);
     let pulse = ContinuousPulse {
         series: &series,

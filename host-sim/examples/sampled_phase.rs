@@ -22,13 +22,12 @@
 use coalshock::detector::shape_fit;
 use coalshock::math::Libm;
 use coalshock::shape_fit::five_about;
+use host_sim::bridge::calibrate::{C_AREA, area_energy_peak};
 use host_sim::bridge::sampled_fit::force_at;
 use host_sim::physics::hertz64::Material64;
 use host_sim::physics::impact::{ImpactSpec, simulate};
 use host_sim::physics::law_spec::LawSpec;
 
-/// Area of the Hertz pulse over `F_max t_c`.
-const C_AREA: f64 = 1.6 / 2.943_275_2;
 /// Phases per `n`.
 const PHASES: usize = 64;
 /// Table points in `n` and cells in the asymmetry.
@@ -38,14 +37,10 @@ const CELLS: usize = 8;
 /// One fit: `n`, `ln(F_fit / F)`, `ln(t_fit / t)`, asymmetry.
 type Fit = (f64, f64, f64, f64);
 
+/// The restitution-parametrised law `name` (as a scene file names it) at restitution `e`.
 fn law(name: &str, e: f64) -> LawSpec {
-    match name {
-        "hunt_crossley" => LawSpec::HuntCrossley { restitution: e },
-        "lankarani_nikravesh" => LawSpec::LankaraniNikravesh { restitution: e },
-        "gonthier" => LawSpec::Gonthier { restitution: e },
-        "tsuji" => LawSpec::Tsuji { restitution: e },
-        _ => LawSpec::Flores { restitution: e },
-    }
+    LawSpec::restitution_law(name, e)
+        .expect("LAW: hunt_crossley, lankarani_nikravesh, flores, gonthier or tsuji")
 }
 
 /// The force series of one impact, its peak, its duration from the area and that over the
@@ -64,11 +59,7 @@ fn pulse(
         .expect("an impact")
         .force_series
         .unwrap_or_default();
-    let (mut area, mut peak) = (0.0, 0.0f64);
-    for w in series.windows(2) {
-        area += 0.5 * (w[1].0 - w[0].0) * (w[0].1.max(0.0) + w[1].1.max(0.0));
-        peak = peak.max(w[1].1);
-    }
+    let (area, _, peak) = area_energy_peak(&series);
     let duration = area / (C_AREA * peak);
     (series, peak, duration, duration / hertz_s)
 }

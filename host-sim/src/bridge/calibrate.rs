@@ -296,6 +296,21 @@ struct Pulse64 {
     area_duration_s: f64,
 }
 
+/// The trapezoid integrals of the force series `series` (`(t_s, force_n)`, negative force
+/// taken as 0): area `int F dt` (N s), energy `int F^2 dt` (N^2 s), and the largest force after
+/// the first point (N).
+pub fn area_energy_peak(series: &[(f64, f64)]) -> (f64, f64, f64) {
+    let (mut area, mut energy, mut peak) = (0.0f64, 0.0f64, 0.0f64);
+    for w in series.windows(2) {
+        let (t0, f0) = (w[0].0, w[0].1.max(0.0));
+        let (t1, f1) = (w[1].0, w[1].1.max(0.0));
+        area += 0.5 * (t1 - t0) * (f0 + f1);
+        energy += 0.5 * (t1 - t0) * (f0 * f0 + f1 * f1);
+        peak = peak.max(f1);
+    }
+    (area, energy, peak)
+}
+
 /// [`pulse_ratios`], the force-time series it was computed from and what the detector reads
 /// of it (peak, duration from the area, top fraction).
 fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
@@ -313,14 +328,7 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
     spec.record = Some(hertz.duration_s / POINTS_PER_PULSE);
     let report = simulate(&spec)?;
     let series = report.force_series.unwrap_or_default();
-    let (mut area, mut energy, mut peak) = (0.0f64, 0.0f64, 0.0f64);
-    for w in series.windows(2) {
-        let (t0, f0) = (w[0].0, w[0].1.max(0.0));
-        let (t1, f1) = (w[1].0, w[1].1.max(0.0));
-        area += 0.5 * (t1 - t0) * (f0 + f1);
-        energy += 0.5 * (t1 - t0) * (f0 * f0 + f1 * f1);
-        peak = peak.max(f1);
-    }
+    let (area, energy, peak) = area_energy_peak(&series);
     let peak = peak.max(report.peak_force_n);
     let t_area = area / (C_AREA * peak);
     let t_energy = energy / (C_ENERGY * peak * peak);

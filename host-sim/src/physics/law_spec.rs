@@ -178,6 +178,27 @@ pub enum LawSpec {
 }
 
 impl LawSpec {
+    /// The restitution-parametrised law named `name` as a scene file names it
+    /// (`hunt_crossley`, `lankarani_nikravesh`, `flores`, `gonthier`, `tsuji`) at restitution
+    /// `restitution`; `None` for any other name.
+    ///
+    /// ```
+    /// use host_sim::law_spec::LawSpec;
+    /// let law = LawSpec::restitution_law("gonthier", 0.3);
+    /// assert_eq!(law, Some(LawSpec::Gonthier { restitution: 0.3 }));
+    /// assert_eq!(LawSpec::restitution_law("hertz", 0.3), None);
+    /// ```
+    pub fn restitution_law(name: &str, restitution: f64) -> Option<Self> {
+        Some(match name {
+            "hunt_crossley" => Self::HuntCrossley { restitution },
+            "lankarani_nikravesh" => Self::LankaraniNikravesh { restitution },
+            "flores" => Self::Flores { restitution },
+            "gonthier" => Self::Gonthier { restitution },
+            "tsuji" => Self::Tsuji { restitution },
+            _ => return None,
+        })
+    }
+
     /// The restitution model and target `e` of a law of the restitution form `(1 + chi
     /// delta_dot / u)` (Hunt-Crossley, Lankarani-Nikravesh, Flores, Gonthier), else `None`.
     pub fn restitution_damping(&self) -> Option<(RestitutionModel, f64)> {
