@@ -5,11 +5,13 @@
 //! the area) and 64 phases, `(j + 0.17) / 64`, fitted with the kernel's three-sample fit, and
 //! corrected
 //!
-//! - by the scene build's phase table (`phase_calibration` of this pulse, at its own 32 phases
-//!   per row), read as the kernel reads it (`n` from the measured duration by two fixed-point
+//! - by the phase table with its means on the rows (`phase_calibration_on_rows` of this
+//!   pulse, at its own 32 phases per row), read as the kernel reads it (`n` from the measured duration by two fixed-point
 //!   steps), read at the true `n`, with 20 fixed-point steps, with `n` by bisection, and at the
 //!   `n` the sums of the samples and of their squares give, `(sum v)^2 / sum v^2` over its
 //!   continuous value per duration (with that `n`'s own error beside the measured duration's);
+//! - by the scene build's phase table (`phase_calibration`, its means refitted to the fits as
+//!   the kernel reads them), read as the kernel reads it;
 //! - by fine tables (means over the phases `(j + 0.5) / 64`) over `(ln n measured, a)` (bins of
 //!   0.01 x 0.01), over `(ln n measured, before / largest, after / largest)` (0.01 x 0.02 x
 //!   0.02) and over `(true ln n, a)`: what those coordinates allow;
@@ -27,7 +29,7 @@ use coalshock::math::Libm;
 use coalshock::shape_fit::five_about;
 use host_sim::bridge::calibrate::{C_AREA, area_energy_peak};
 use host_sim::bridge::sampled_fit::{ContinuousPulse, sample_series};
-use host_sim::bridge::sampled_phase::phase_calibration;
+use host_sim::bridge::sampled_phase::{phase_calibration, phase_calibration_on_rows};
 use host_sim::physics::hertz64::Material64;
 use host_sim::physics::impact::{ImpactSpec, simulate};
 use host_sim::physics::law_spec::LawSpec;
@@ -426,7 +428,8 @@ fn main() {
         peak_n: peak,
         duration_s: duration,
     };
-    let table = phase_calibration(std::slice::from_ref(&pulse)).to_kernel();
+    let table = phase_calibration_on_rows(std::slice::from_ref(&pulse)).to_kernel();
+    let least_squares = phase_calibration(std::slice::from_ref(&pulse)).to_kernel();
     let ns: Vec<f64> = (0..600)
         .map(|i| 1.6 * (5.0f64 / 1.6).powf(i as f64 / 599.0))
         .collect();
@@ -518,20 +521,57 @@ fn main() {
         &test.iter().map(|f| (f.n, f.err)).collect::<Vec<_>>(),
     );
     print_rms(
-        "the scene's phase table, read as the kernel reads it",
+        "the phase table on the rows, read as the kernel reads it",
         &kernel,
     );
-    print_rms("the scene's phase table, read at the true n", &at_true);
+    let as_read = |t: &coalshock::SampledPhase, f: &Fit| {
+        let ln_meas = f.n_meas.ln() as f32;
+        let mut ln_n = ln_meas;
+        for _ in 0..2 {
+            ln_n = ln_meas - t.at(ln_n, f.a as f32)?.1;
+        }
+        let (lf, lt, _, _) = t.at(ln_n, f.a as f32)?;
+        Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
+    };
     print_rms(
-        "the scene's phase table, read at n from the area and the energy",
+        "the scene's phase table (least squares as read), read as the kernel reads it",
+        &test
+            .iter()
+            .filter_map(|f| as_read(&least_squares, f))
+            .collect::<Vec<_>>(),
+    );
+    // The detector measures no pulse shorter than MIN_DURATION_SAMPLES.
+    let measured = |f: &&Fit| f.n_meas >= f64::from(coalshock::scene::MIN_DURATION_SAMPLES);
+    print_rms(
+        "the phase table on the rows, as read, pulses measured >= 2.5 samples",
+        &test
+            .iter()
+            .filter(measured)
+            .filter_map(|f| as_read(&table, f))
+            .collect::<Vec<_>>(),
+    );
+    print_rms(
+        "the scene's phase table (least squares as read), as read, pulses measured >= 2.5 samples",
+        &test
+            .iter()
+            .filter(measured)
+            .filter_map(|f| as_read(&least_squares, f))
+            .collect::<Vec<_>>(),
+    );
+    print_rms("the phase table on the rows, read at the true n", &at_true);
+    print_rms(
+        "the phase table on the rows, read at n from the area and the energy",
         &at_area_energy,
     );
     print_rms(
         "error of ln n from the area and the energy / of the measured duration",
         &n_error,
     );
-    print_rms("the scene's phase table, 20 fixed-point steps", &one_step);
-    print_rms("the scene's phase table, n by bisection", &bisected);
+    print_rms(
+        "the phase table on the rows, 20 fixed-point steps",
+        &one_step,
+    );
+    print_rms("the phase table on the rows, n by bisection", &bisected);
     let q = |x: f64, w: f64| (x / w).round() as i64;
     print_rms(
         "fine table over (ln n measured, a)",

@@ -9,7 +9,11 @@
 //!   it, comes within 1.5 pp of the reference limit (2.9 pp below without it);
 //! - Tsuji at e 0.3, on an impact not in the calibration, between the table's rows and read as
 //!   the kernel reads it, leaves errors within the spreads the table states (with spreads taken
-//!   on the rows alone, 12 times them in `ln t_c`).
+//!   on the rows alone, 12 times them in `ln t_c`);
+//! - on an impact not in the calibration, at samples per pulse and phases it does not use, the
+//!   table whose means are refitted as the kernel reads them (`phase_calibration`) leaves no
+//!   more, read by `coalshock::SampledPhase::at` as the kernel reads it, than the means on the
+//!   rows (`phase_calibration_on_rows`), for Flores e 0.5, Tsuji e 0.3 and Hunt-Crossley e 0.9.
 
 use coalshock::math::DefaultBackend;
 use host_sim::calibrate::{C_AREA, fit_sampled_at};
@@ -66,9 +70,22 @@ fn phase_table_corrects_unseen_phases_of_an_unseen_impact() {
         for j in 0..23 {
             let phase = (j as f64 + 0.29) / 23.0;
             let (f, samples, a) = fit_sampled_at(&series, dt, phase).unwrap();
+            // The detector measures no shorter pulse.
+            if samples < f64::from(coalshock::scene::MIN_DURATION_SAMPLES) {
+                continue;
+            }
             let (lf, lt) = ((f / peak_n).ln(), (samples * dt / duration_s).ln());
             let ln_n = (n as f32).ln();
-            let (pf, pt, sf, st) = table.at(ln_n, a as f32).unwrap();
+            // The duration means are those at the row's true n; the force means are fitted
+            // to the kernel's reading, at the n two fixed-point steps infer from the
+            // measured duration.
+            let ln_measured = (samples as f32).ln();
+            let mut ln_read = ln_measured;
+            for _ in 0..2 {
+                ln_read = ln_measured - table.at(ln_read, a as f32).unwrap().1;
+            }
+            let (pf, _, sf, _) = table.at(ln_read, a as f32).unwrap();
+            let (_, pt, _, st) = table.at(ln_n, a as f32).unwrap();
             let (qf, qt, _, _) = by_n.at(ln_n);
             phase_f.push(lf - f64::from(pf));
             phase_t.push(lt - f64::from(pt));
@@ -156,4 +173,84 @@ fn tsuji_residuals_between_rows_stay_within_the_stated_spread() {
     );
     assert!(rms(&zf) <= 1.25 && rms(&zt) <= 1.25);
     assert!(worst(&zf) <= 4.0 && worst(&zt) <= 4.0);
+}
+
+/// The root mean square of `ln F` and of `ln t_c` that `table` leaves on `series`'s pulse
+/// (peak `peak_n`, duration `duration_s`) at `ns` samples per pulse and 23 phases the
+/// calibration does not use, measured at least `MIN_DURATION_SAMPLES` long, each read as the
+/// kernel reads it: `coalshock::SampledPhase::at`
+/// at the `ln n` of two fixed-point steps from the measured duration.
+fn left_as_read(
+    table: &coalshock::SampledPhase,
+    series: &[(f64, f64)],
+    peak_n: f64,
+    duration_s: f64,
+    ns: &[f64],
+) -> [f64; 2] {
+    let (mut rf, mut rt) = (vec![], vec![]);
+    for &n in ns {
+        let dt = duration_s / n;
+        for j in 0..23 {
+            let Some((f, samples, a)) = fit_sampled_at(series, dt, (j as f64 + 0.29) / 23.0) else {
+                continue;
+            };
+            // The detector measures no pulse shorter than this.
+            if samples < f64::from(coalshock::scene::MIN_DURATION_SAMPLES) {
+                continue;
+            }
+            let ln_measured = (samples as f32).ln();
+            let mut ln_n = ln_measured;
+            for _ in 0..2 {
+                ln_n = ln_measured - table.at(ln_n, a as f32).unwrap().1;
+            }
+            let (pf, pt, _, _) = table.at(ln_n, a as f32).unwrap();
+            rf.push((f / peak_n).ln() - f64::from(pf));
+            rt.push((samples * dt / duration_s).ln() - f64::from(pt));
+        }
+    }
+    [rms(&rf), rms(&rt)]
+}
+
+#[test]
+fn means_fitted_as_read_leave_less_on_an_unseen_impact() {
+    use host_sim::bridge::sampled_fit::ContinuousPulse;
+    use host_sim::bridge::sampled_phase::{phase_calibration, phase_calibration_on_rows};
+    use host_sim::law_spec::LawSpec;
+    for law in [
+        LawSpec::Flores { restitution: 0.5 },
+        LawSpec::Tsuji { restitution: 0.3 },
+        LawSpec::HuntCrossley { restitution: 0.9 },
+    ] {
+        let mut scene = shipped("flores_25k");
+        scene.contact = law;
+        let impacts: Vec<_> = [(0.015, 1.0), (0.04, 5.0), (0.0245, 3.0)]
+            .iter()
+            .map(|&(r, u)| integrated(&scene, r, u))
+            .collect();
+        let pulses: Vec<ContinuousPulse> = impacts
+            .iter()
+            .map(|(series, peak_n, duration_s)| ContinuousPulse {
+                series,
+                peak_n: *peak_n,
+                duration_s: *duration_s,
+            })
+            .collect();
+        let fitted = phase_calibration(&pulses).to_kernel();
+        let on_rows = phase_calibration_on_rows(&pulses).to_kernel();
+        let (series, peak_n, duration_s) = integrated(&scene, 0.021, 2.3);
+        // Bands 2-2.5, 2.5-4 and 4-10 samples per pulse, none on a row.
+        for (lo, hi) in [(2.0f64, 2.5), (2.5, 4.0), (4.0, 10.0)] {
+            let ns: Vec<f64> = (0..17)
+                .map(|i| lo * (hi / lo).powf((i as f64 + 0.41) / 17.0))
+                .collect();
+            let new = left_as_read(&fitted, &series, peak_n, duration_s, &ns);
+            let old = left_as_read(&on_rows, &series, peak_n, duration_s, &ns);
+            println!(
+                "{law:?} n {lo}-{hi}: rms ln F / ln t as read {:.4} / {:.4} (means on the rows {:.4} / {:.4})",
+                new[0], new[1], old[0], old[1]
+            );
+            let sum = |r: [f64; 2]| r[0] * r[0] + r[1] * r[1];
+            assert!(sum(new) <= 1.05 * sum(old) + 1e-6);
+        }
+    }
 }
