@@ -13,6 +13,7 @@ use coalshock::sampled_phase::{
 use coalshock::scene::MIN_DURATION_SAMPLES;
 
 use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
+use crate::physics::integrate::lu::Lu;
 
 /// Sample phases per row of [`phase_calibration`]: `(j + 1/2) / TABLE_PHASES`, `j = 0..32`.
 pub const TABLE_PHASES: usize = 32;
@@ -267,68 +268,89 @@ fn least_squares_as_read(
     check: &[Vec<Vec<Fit>>],
     start: Phase64,
 ) -> Phase64 {
-    const CELLS: usize = PHASE_ROWS * PHASE_COLUMNS;
-    // (row of true n, fit) of the pulses the detector measures.
-    let measured = |set: &[Vec<Vec<Fit>>]| -> Vec<(usize, Fit)> {
-        set.iter()
-            .enumerate()
-            .flat_map(|(k, r)| r.iter().flatten().map(move |f| (k, *f)))
-            .filter(|(_, f)| f.samples >= f64::from(MIN_DURATION_SAMPLES))
-            .collect()
-    };
-    let (fit_on, held) = (measured(rows), measured(check));
+    let (fit_on, held) = (measured_fits(rows), measured_fits(check));
     if fit_on.is_empty() || held.is_empty() {
         return start;
     }
-    let kernel = start.to_kernel();
-    // The force means under the kernel's bilinear weights where it reads `start`.
-    let mut a = vec![vec![0.0; CELLS]; CELLS];
-    let mut b = vec![[0.0; 2]; CELLS];
-    for (_, f) in &fit_on {
-        let Some((ln_n, _)) = read_as_kernel(&kernel, f.samples, f.asymmetry) else {
-            continue;
-        };
-        let w = bilinear_weights(&start.asymmetry, ln_n, f.asymmetry);
-        for &(i, wi) in &w {
-            b[i][0] += wi * f.ln_force;
-            for &(j, wj) in &w {
-                a[i][j] += wi * wj;
-            }
-        }
-    }
-    let ridge = LS_RIDGE * fit_on.len() as f64 / CELLS as f64;
-    for (i, row) in a.iter_mut().enumerate() {
-        row[i] += ridge;
-        b[i][0] += ridge * start.ln_force[i / PHASE_COLUMNS][i % PHASE_COLUMNS];
-    }
-    let mut refit = start;
-    for (i, v) in solve(a, b).iter().enumerate() {
-        refit.ln_force[i / PHASE_COLUMNS][i % PHASE_COLUMNS] = v[0].clamp(-2.0, 2.0);
-    }
-    // Per row of true n, the mean squares of ln F and ln t that `t` leaves on `held` as read.
-    let by_row = |t: &Phase64| {
-        let kernel = t.to_kernel();
-        let mut out = [[0.0; 3]; PHASE_ROWS];
-        for (k, f) in &held {
-            if let Some((_, (lf, lt))) = read_as_kernel(&kernel, f.samples, f.asymmetry) {
-                out[*k][0] += (f.ln_force - lf).powi(2);
-                out[*k][1] += (f.ln_duration - lt).powi(2);
-                out[*k][2] += 1.0;
-            }
-        }
-        out.map(|[f, t, n]| if n > 0.0 { [f / n, t / n] } else { [0.0, 0.0] })
+    let (a, b) = normal_equations(&fit_on, &start);
+    let Some(lu) = Lu::new(a) else {
+        return start;
     };
-    let (old, new) = (by_row(&start), by_row(&refit));
+    let mut refit = start;
+    for (i, v) in lu.solve(b).iter().enumerate() {
+        refit.ln_force[i / PHASE_COLUMNS][i % PHASE_COLUMNS] = v.clamp(-2.0, 2.0);
+    }
+    let (old, new) = (row_residuals(&start, &held), row_residuals(&refit, &held));
     let total = |r: &[[f64; 2]; PHASE_ROWS]| r.iter().map(|x| x[0] + x[1]).sum::<f64>();
+    let bound = LS_ROW_TOLERANCE * LS_ROW_TOLERANCE;
     let no_row_worse = new
         .iter()
         .zip(&old)
-        .all(|(x, s)| (0..2).all(|m| x[m] <= s[m] * LS_ROW_TOLERANCE * LS_ROW_TOLERANCE + 1e-12));
+        .all(|(x, s)| (0..2).all(|m| x[m] <= s[m] * bound + 1e-12));
     if no_row_worse && total(&new) < total(&old) {
         refit
     } else {
         start
     }
+}
+
+/// Table cells, `PHASE_ROWS * PHASE_COLUMNS`, the unknowns of [`least_squares_as_read`].
+const CELLS: usize = PHASE_ROWS * PHASE_COLUMNS;
+
+/// `(row of true samples per pulse, fit)` of every fit in `set` the detector measures (at
+/// least [`MIN_DURATION_SAMPLES`] long).
+fn measured_fits(set: &[Vec<Vec<Fit>>]) -> Vec<(usize, Fit)> {
+    set.iter()
+        .enumerate()
+        .flat_map(|(k, r)| r.iter().flatten().map(move |f| (k, *f)))
+        .filter(|(_, f)| f.samples >= f64::from(MIN_DURATION_SAMPLES))
+        .collect()
+}
+
+/// `(W^T W + r I, W^T y + r m)`: the normal equations of the force means `m` of the cells,
+/// where row `W_i` of `W` holds the kernel's bilinear weights where it reads `start` at fit
+/// `i`, `y_i = ln(F_fit / F_peak)` of that fit, and `r` the ridge [`LS_RIDGE`] (per cell, as
+/// a share of the fits per cell) toward `start`'s means.
+fn normal_equations(
+    fits: &[(usize, Fit)],
+    start: &Phase64,
+) -> ([[f64; CELLS]; CELLS], [f64; CELLS]) {
+    let kernel = start.to_kernel();
+    let mut a = [[0.0; CELLS]; CELLS];
+    let mut b = [0.0; CELLS];
+    for (_, f) in fits {
+        let Some((ln_n, _)) = read_as_kernel(&kernel, f.samples, f.asymmetry) else {
+            continue;
+        };
+        let w = bilinear_weights(&start.asymmetry, ln_n, f.asymmetry);
+        for &(i, wi) in &w {
+            b[i] += wi * f.ln_force;
+            for &(j, wj) in &w {
+                a[i][j] += wi * wj;
+            }
+        }
+    }
+    let ridge = LS_RIDGE * fits.len() as f64 / CELLS as f64;
+    for (i, row) in a.iter_mut().enumerate() {
+        row[i] += ridge;
+        b[i] += ridge * start.ln_force[i / PHASE_COLUMNS][i % PHASE_COLUMNS];
+    }
+    (a, b)
+}
+
+/// Per row of true samples per pulse, the mean squares of `ln F` and `ln t` that `table`
+/// leaves on `fits` as the kernel reads it (`[0, 0]` for a row without fits).
+fn row_residuals(table: &Phase64, fits: &[(usize, Fit)]) -> [[f64; 2]; PHASE_ROWS] {
+    let kernel = table.to_kernel();
+    let mut sums = [[0.0; 3]; PHASE_ROWS];
+    for (k, f) in fits {
+        if let Some((_, (lf, lt))) = read_as_kernel(&kernel, f.samples, f.asymmetry) {
+            sums[*k][0] += (f.ln_force - lf).powi(2);
+            sums[*k][1] += (f.ln_duration - lt).powi(2);
+            sums[*k][2] += 1.0;
+        }
+    }
+    sums.map(|[f, t, n]| if n > 0.0 { [f / n, t / n] } else { [0.0, 0.0] })
 }
 
 /// Factor by which [`least_squares_as_read`] lets one row's root mean square residual grow.
@@ -361,41 +383,6 @@ fn bilinear_weights(axes: &[[f64; 2]; PHASE_ROWS], ln_n: f64, a: f64) -> Vec<(us
         w.push((k * PHASE_COLUMNS + c + 1, wk * g));
     }
     w
-}
-
-/// `a x = b` (two right-hand sides) by Gaussian elimination with partial pivoting.
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
-    let n = b.len();
-    for c in 0..n {
-        let p = (c..n)
-            .max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))
-            .unwrap_or(c);
-        a.swap(c, p);
-        b.swap(c, p);
-        let d = a[c][c];
-        for r in c + 1..n {
-            let f = a[r][c] / d;
-            if f != 0.0 {
-                let (top, rest) = a.split_at_mut(r);
-                for (x, y) in rest[0][c..].iter_mut().zip(&top[c][c..]) {
-                    *x -= f * y;
-                }
-                let bc = b[c];
-                b[r][0] -= f * bc[0];
-                b[r][1] -= f * bc[1];
-            }
-        }
-    }
-    let mut x = vec![[0.0f64; 2]; n];
-    for c in (0..n).rev() {
-        let mut s = b[c];
-        for k in c + 1..n {
-            s[0] -= a[c][k] * x[k][0];
-            s[1] -= a[c][k] * x[k][1];
-        }
-        x[c] = [s[0] / a[c][c], s[1] / a[c][c]];
-    }
-    x
 }
 
 /// `sqrt(mean(r^2))`.

@@ -124,7 +124,7 @@ mod dense;
 mod dop853;
 mod dopri5;
 mod error_scale;
-mod lu;
+pub(crate) mod lu;
 mod peak;
 mod radau;
 mod radau_tableau;

@@ -1,9 +1,10 @@
 //! LU factorisation with partial pivoting of a small dense matrix held in a fixed array, and
-//! the solve with its factors (Radau13's Newton matrix, factored once per step).
+//! the solve with its factors (Radau13's Newton matrix, factored once per step; the phase
+//! table's least-squares refit).
 
 /// `P M = L U` of an `N x N` matrix in place: `U` on and above the diagonal, the multipliers of
 /// the unit lower `L` below it, `piv[k]` the row swapped into row `k` at elimination step `k`.
-pub(super) struct Lu<const N: usize> {
+pub(crate) struct Lu<const N: usize> {
     m: [[f64; N]; N],
     piv: [usize; N],
 }
@@ -11,7 +12,7 @@ pub(super) struct Lu<const N: usize> {
 impl<const N: usize> Lu<N> {
     /// Factors `m` (Gaussian elimination, largest pivot of each column); `None` when a pivot
     /// is zero or not finite (the matrix is singular to working precision or not finite).
-    pub(super) fn new(mut m: [[f64; N]; N]) -> Option<Self> {
+    pub(crate) fn new(mut m: [[f64; N]; N]) -> Option<Self> {
         let mut piv = [0; N];
         for k in 0..N {
             let mut p = k;
@@ -43,7 +44,7 @@ impl<const N: usize> Lu<N> {
 
     /// `x` with `M x = b`: the row swaps, forward substitution with `L`, back substitution
     /// with `U`.
-    pub(super) fn solve(&self, mut b: [f64; N]) -> [f64; N] {
+    pub(crate) fn solve(&self, mut b: [f64; N]) -> [f64; N] {
         for k in 0..N {
             b.swap(k, self.piv[k]);
         }
