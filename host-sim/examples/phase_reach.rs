@@ -35,6 +35,9 @@ use host_sim::physics::impact::{ImpactSpec, simulate};
 use host_sim::physics::law_spec::LawSpec;
 use std::collections::HashMap;
 
+/// Residuals `ln F_max / ln t_c` left on the test fits, each with its fit's true `n`.
+type Residuals = Vec<(f64, [f64; 2])>;
+
 const BANDS: [f64; 6] = [1.6, 2.0, 2.5, 3.2, 4.0, 5.0];
 
 /// The restitution-parametrised law `name` (as a scene file names it) at restitution `e`.
@@ -107,7 +110,7 @@ fn binned<K: std::hash::Hash + Eq>(
     train: &[Fit],
     test: &[Fit],
     key: impl Fn(&Fit) -> K,
-) -> Vec<(f64, [f64; 2])> {
+) -> Residuals {
     let mut sums: HashMap<K, [f64; 3]> = HashMap::new();
     for f in train {
         let e = sums.entry(key(f)).or_insert([0.0; 3]);
@@ -147,7 +150,7 @@ fn coarse(
     ln_step: f64,
     rows: usize,
     cols: usize,
-) -> Vec<(f64, [f64; 2])> {
+) -> Residuals {
     let row_of = |f: &Fit| ((f.n_meas.ln() - ln_first) / ln_step).round();
     let mut axes = vec![[f64::INFINITY, f64::NEG_INFINITY]; rows];
     for f in train {
@@ -217,7 +220,7 @@ fn coarse_true(
     step: f64,
     rows: usize,
     cols: usize,
-) -> Vec<(f64, [f64; 2])> {
+) -> Residuals {
     let n_of = |k: usize| 1.6 * step.powi(k as i32);
     let mut axes = vec![[0.0f64; 2]; rows];
     let mut mean = vec![vec![[0.0f64; 2]; cols]; rows];
@@ -289,7 +292,7 @@ fn least_squares_measured(
     ln_step: f64,
     rows: usize,
     cols: usize,
-) -> Vec<(f64, [f64; 2])> {
+) -> Residuals {
     let x_of = |f: &Fit| (f.n_meas.ln() - ln_first) / ln_step;
     let mut axes = vec![[f64::INFINITY, f64::NEG_INFINITY]; rows];
     for f in train {
@@ -409,6 +412,182 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
     x
 }
 
+/// The residual `ln F_max / ln t_c` that `t` leaves on `f` read at `ln_n`, by `f`'s true `n`.
+fn left_at(t: &coalshock::SampledPhase, f: &Fit, ln_n: f32) -> Option<(f64, [f64; 2])> {
+    let (lf, lt, _, _) = t.at(ln_n, f.a as f32)?;
+    Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
+}
+
+/// The `ln n` that `steps` fixed-point steps of `ln n = ln n_measured - ln_duration(ln n, a)`
+/// settle on (the kernel takes two).
+fn fixed_point(t: &coalshock::SampledPhase, f: &Fit, steps: usize) -> Option<f32> {
+    let ln_meas = f.n_meas.ln() as f32;
+    let mut ln_n = ln_meas;
+    for _ in 0..steps {
+        ln_n = ln_meas - t.at(ln_n, f.a as f32)?.1;
+    }
+    Some(ln_n)
+}
+
+/// The `ln n` of `ln n + ln_duration(ln n, a) = ln n_measured` by 30 bisections over the
+/// table's rows.
+fn bisection(t: &coalshock::SampledPhase, f: &Fit) -> Option<f32> {
+    let ln_meas = f.n_meas.ln() as f32;
+    let h = |x: f32| t.at(x, f.a as f32).map(|v| x + v.1 - ln_meas);
+    let (mut lo, mut hi) = (1.6f32.ln(), 11.9f32.ln());
+    if h(lo)? > 0.0 {
+        hi = lo;
+    }
+    for _ in 0..30 {
+        let mid = 0.5 * (lo + hi);
+        if h(mid)? > 0.0 { hi = mid } else { lo = mid }
+    }
+    Some(0.5 * (lo + hi))
+}
+
+/// `(label, residuals)` of the phase tables read each way over the test fits (see the module
+/// docs), and the error of `ln n` from the area and the energy.
+fn readings(
+    series: &[(f64, f64)],
+    duration: f64,
+    table: &coalshock::SampledPhase,
+    least_squares: &coalshock::SampledPhase,
+    test: &[Fit],
+) -> Vec<(&'static str, Residuals)> {
+    // The continuous pulse's (integral F)^2 / (integral F^2) over its duration from the area.
+    let (mut e2, mut a1) = (0.0, 0.0);
+    for w in series.windows(2) {
+        let h = w[1].0 - w[0].0;
+        a1 += 0.5 * h * (w[0].1 + w[1].1);
+        e2 += 0.5 * h * (w[0].1 * w[0].1 + w[1].1 * w[1].1);
+    }
+    let ae_per_duration = a1 * a1 / e2 / duration;
+    // The detector measures no pulse shorter than MIN_DURATION_SAMPLES.
+    let measured = |f: &&Fit| f.n_meas >= f64::from(coalshock::scene::MIN_DURATION_SAMPLES);
+    let read =
+        |t: &coalshock::SampledPhase, only_measured: bool, at: &dyn Fn(&Fit) -> Option<f32>| {
+            test.iter()
+                .filter(|f| !only_measured || measured(f))
+                .filter_map(|f| left_at(t, f, at(f)?))
+                .collect::<Vec<_>>()
+        };
+    let two_steps = |t| move |f: &Fit| fixed_point(t, f, 2);
+    vec![
+        (
+            "none (the fit's own error)",
+            test.iter().map(|f| (f.n, f.err)).collect(),
+        ),
+        (
+            "the phase table on the rows, read as the kernel reads it",
+            read(table, false, &two_steps(table)),
+        ),
+        (
+            "the scene's phase table (least squares as read), read as the kernel reads it",
+            read(least_squares, false, &two_steps(least_squares)),
+        ),
+        (
+            "the phase table on the rows, as read, pulses measured >= 2.5 samples",
+            read(table, true, &two_steps(table)),
+        ),
+        (
+            "the scene's phase table (least squares as read), as read, pulses measured >= 2.5 samples",
+            read(least_squares, true, &two_steps(least_squares)),
+        ),
+        (
+            "the phase table on the rows, read at the true n",
+            read(table, false, &|f| Some(f.n.ln() as f32)),
+        ),
+        (
+            "the phase table on the rows, read at n from the area and the energy",
+            read(table, false, &|f| {
+                Some((f.area_energy / ae_per_duration).ln() as f32)
+            }),
+        ),
+        (
+            "error of ln n from the area and the energy / of the measured duration",
+            test.iter()
+                .map(|f| {
+                    (
+                        f.n,
+                        [
+                            (f.area_energy / ae_per_duration / f.n).ln(),
+                            (f.n_meas / f.n).ln(),
+                        ],
+                    )
+                })
+                .collect(),
+        ),
+        (
+            "the phase table on the rows, 20 fixed-point steps",
+            read(table, false, &|f| fixed_point(table, f, 20)),
+        ),
+        (
+            "the phase table on the rows, n by bisection",
+            read(table, false, &|f| bisection(table, f)),
+        ),
+    ]
+}
+
+/// Prints the rows of the coarse tables over `(ln n measured, a)` (means and least squares)
+/// and over `(true ln n, a)`, from the smallest measured `n` `low`.
+fn print_coarse(
+    series: &[(f64, f64)],
+    peak: f64,
+    duration: f64,
+    train: &[Fit],
+    test: &[Fit],
+    low: f64,
+) {
+    let on_measured = format!("apart from {low:.2}");
+    let means = |rows, step: f64, cols| coarse(train, test, low.ln(), step.ln(), rows, cols);
+    let least = |rows, step: f64, cols| {
+        least_squares_measured(train, test, low.ln(), step.ln(), rows, cols)
+    };
+    let true_n = |rows, step, cols| coarse_true(series, peak, duration, test, step, rows, cols);
+    type Build<'a> = &'a dyn Fn(usize, f64, usize) -> Residuals;
+    type Sizes<'a> = &'a [(usize, f64, usize)];
+    let kinds: [(&str, &str, Sizes, Build); 3] = [
+        (
+            "table over (ln n measured, a), rows",
+            &on_measured,
+            &[
+                (10, 1.25, 8),
+                (10, 1.25, 16),
+                (16, 1.15, 8),
+                (20, 1.12, 8),
+                (20, 1.12, 16),
+            ],
+            &means,
+        ),
+        (
+            "least-squares table over (ln n measured, a), rows",
+            &on_measured,
+            &[(10, 1.25, 8), (10, 1.25, 16), (20, 1.12, 8), (20, 1.12, 16)],
+            &least,
+        ),
+        (
+            "table over (true ln n, a), rows",
+            "apart, read as the kernel reads",
+            &[
+                (10, 1.25, 8),
+                (10, 1.25, 16),
+                (19, 1.12, 8),
+                (19, 1.12, 16),
+                (37, 1.06, 32),
+            ],
+            &true_n,
+        ),
+    ];
+    for (what, tail, sizes, build) in kinds {
+        for &(rows, step, cols) in sizes {
+            print_rms(
+                &format!("{rows} x {cols} {what} {step} {tail}"),
+                &build(rows, step, cols),
+            );
+        }
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let name = args.get(1).map_or("flores", |s| s.as_str());
@@ -440,138 +619,14 @@ fn main() {
             .collect()
     };
     let (train, test) = (fits(0.5), fits(0.17));
-    let kernel: Vec<(f64, [f64; 2])> = test
-        .iter()
-        .filter_map(|f| {
-            let ln_meas = f.n_meas.ln() as f32;
-            let mut ln_n = ln_meas;
-            for _ in 0..2 {
-                ln_n = ln_meas - table.at(ln_n, f.a as f32)?.1;
-            }
-            let (lf, lt, _, _) = table.at(ln_n, f.a as f32)?;
-            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
-        })
-        .collect();
-    // The continuous pulse's (integral F)^2 / (integral F^2) over its duration from the area.
-    let (mut e2, mut a1) = (0.0, 0.0);
-    for w in series.windows(2) {
-        let h = w[1].0 - w[0].0;
-        a1 += 0.5 * h * (w[0].1 + w[1].1);
-        e2 += 0.5 * h * (w[0].1 * w[0].1 + w[1].1 * w[1].1);
-    }
-    let ae_per_duration = a1 * a1 / e2 / duration;
-    let at_area_energy: Vec<(f64, [f64; 2])> = test
-        .iter()
-        .filter_map(|f| {
-            let ln_n = (f.area_energy / ae_per_duration).ln() as f32;
-            let (lf, lt, _, _) = table.at(ln_n, f.a as f32)?;
-            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
-        })
-        .collect();
-    let n_error: Vec<(f64, [f64; 2])> = test
-        .iter()
-        .map(|f| {
-            let e = (f.area_energy / ae_per_duration / f.n).ln();
-            (f.n, [e, (f.n_meas / f.n).ln()])
-        })
-        .collect();
-    let at_true: Vec<(f64, [f64; 2])> = test
-        .iter()
-        .filter_map(|f| {
-            let (lf, lt, _, _) = table.at(f.n.ln() as f32, f.a as f32)?;
-            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
-        })
-        .collect();
-    let one_step: Vec<(f64, [f64; 2])> = test
-        .iter()
-        .filter_map(|f| {
-            let ln_meas = f.n_meas.ln() as f32;
-            let mut ln_n = ln_meas;
-            for _ in 0..20 {
-                ln_n = ln_meas - table.at(ln_n, f.a as f32)?.1;
-            }
-            let (lf, lt, _, _) = table.at(ln_n, f.a as f32)?;
-            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
-        })
-        .collect();
-    let bisected: Vec<(f64, [f64; 2])> = test
-        .iter()
-        .filter_map(|f| {
-            let ln_meas = f.n_meas.ln() as f32;
-            let h = |x: f32| table.at(x, f.a as f32).map(|v| x + v.1 - ln_meas);
-            let (mut lo, mut hi) = (1.6f32.ln(), 11.9f32.ln());
-            if h(lo)? > 0.0 {
-                hi = lo;
-            }
-            for _ in 0..30 {
-                let mid = 0.5 * (lo + hi);
-                if h(mid)? > 0.0 { hi = mid } else { lo = mid }
-            }
-            let (lf, lt, _, _) = table.at(0.5 * (lo + hi), f.a as f32)?;
-            Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
-        })
-        .collect();
     println!(
         "{name} e {e}: rms of ln F_max / ln t_c left, noiseless, by samples per pulse (duration from the area)"
     );
     println!("| correction | 1.6-2 | 2-2.5 | 2.5-3.2 | 3.2-4 | 4-5 |");
     println!("|---|---|---|---|---|---|");
-    print_rms(
-        "none (the fit's own error)",
-        &test.iter().map(|f| (f.n, f.err)).collect::<Vec<_>>(),
-    );
-    print_rms(
-        "the phase table on the rows, read as the kernel reads it",
-        &kernel,
-    );
-    let as_read = |t: &coalshock::SampledPhase, f: &Fit| {
-        let ln_meas = f.n_meas.ln() as f32;
-        let mut ln_n = ln_meas;
-        for _ in 0..2 {
-            ln_n = ln_meas - t.at(ln_n, f.a as f32)?.1;
-        }
-        let (lf, lt, _, _) = t.at(ln_n, f.a as f32)?;
-        Some((f.n, [f.err[0] - f64::from(lf), f.err[1] - f64::from(lt)]))
-    };
-    print_rms(
-        "the scene's phase table (least squares as read), read as the kernel reads it",
-        &test
-            .iter()
-            .filter_map(|f| as_read(&least_squares, f))
-            .collect::<Vec<_>>(),
-    );
-    // The detector measures no pulse shorter than MIN_DURATION_SAMPLES.
-    let measured = |f: &&Fit| f.n_meas >= f64::from(coalshock::scene::MIN_DURATION_SAMPLES);
-    print_rms(
-        "the phase table on the rows, as read, pulses measured >= 2.5 samples",
-        &test
-            .iter()
-            .filter(measured)
-            .filter_map(|f| as_read(&table, f))
-            .collect::<Vec<_>>(),
-    );
-    print_rms(
-        "the scene's phase table (least squares as read), as read, pulses measured >= 2.5 samples",
-        &test
-            .iter()
-            .filter(measured)
-            .filter_map(|f| as_read(&least_squares, f))
-            .collect::<Vec<_>>(),
-    );
-    print_rms("the phase table on the rows, read at the true n", &at_true);
-    print_rms(
-        "the phase table on the rows, read at n from the area and the energy",
-        &at_area_energy,
-    );
-    print_rms(
-        "error of ln n from the area and the energy / of the measured duration",
-        &n_error,
-    );
-    print_rms(
-        "the phase table on the rows, 20 fixed-point steps",
-        &one_step,
-    );
-    print_rms("the phase table on the rows, n by bisection", &bisected);
+    for (label, residuals) in readings(&series, duration, &table, &least_squares, &test) {
+        print_rms(label, &residuals);
+    }
     let q = |x: f64, w: f64| (x / w).round() as i64;
     print_rms(
         "fine table over (ln n measured, a)",
@@ -589,47 +644,7 @@ fn main() {
         .map(|f| f.n_meas)
         .fold(f64::INFINITY, f64::min);
     println!("(smallest measured n at true n 1.6-1.65: {low:.3})");
-    for (rows, step, cols) in [
-        (10, 1.25f64, 8),
-        (10, 1.25, 16),
-        (16, 1.15, 8),
-        (20, 1.12, 8),
-        (20, 1.12, 16),
-    ] {
-        print_rms(
-            &format!(
-                "{rows} x {cols} table over (ln n measured, a), rows {step} apart from {low:.2}"
-            ),
-            &coarse(&train, &test, low.ln(), step.ln(), rows, cols),
-        );
-    }
-    for (rows, step, cols) in [
-        (10, 1.25f64, 8),
-        (10, 1.25, 16),
-        (20, 1.12, 8),
-        (20, 1.12, 16),
-    ] {
-        print_rms(
-            &format!(
-                "{rows} x {cols} least-squares table over (ln n measured, a), rows {step} apart from {low:.2}"
-            ),
-            &least_squares_measured(&train, &test, low.ln(), step.ln(), rows, cols),
-        );
-    }
-    for (rows, step, cols) in [
-        (10, 1.25f64, 8),
-        (10, 1.25, 16),
-        (19, 1.12, 8),
-        (19, 1.12, 16),
-        (37, 1.06, 32),
-    ] {
-        print_rms(
-            &format!(
-                "{rows} x {cols} table over (true ln n, a), rows {step} apart, read as the kernel reads"
-            ),
-            &coarse_true(&series, peak, duration, &test, step, rows, cols),
-        );
-    }
+    print_coarse(&series, peak, duration, &train, &test, low);
     print_rms(
         "fine table over (true ln n, a)",
         &binned(&train, &test, |f| (q(f.n.ln(), 0.01), q(f.a, 0.01))),
