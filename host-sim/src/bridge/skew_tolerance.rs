@@ -239,9 +239,11 @@ fn impact_excesses(p: &Scaled, skew_mean: f64, check: &SkewCheck, out: &mut Vec<
         return;
     }
     let phases = phases_for(samples);
+    let mut above = Vec::new();
     for k in 0..phases {
         let phase = (k as f64 + 0.5) / phases as f64;
-        let excess = sampled_excess(p, phase, skew_mean, check).unwrap_or(f64::NEG_INFINITY);
+        let excess =
+            sampled_excess(p, phase, skew_mean, check, &mut above).unwrap_or(f64::NEG_INFINITY);
         out.push((excess, 1.0 / phases as f64));
     }
 }
@@ -250,12 +252,19 @@ fn impact_excesses(p: &Scaled, skew_mean: f64, check: &SkewCheck, out: &mut Vec<
 /// first contact falls outside its allowance without the noise term,
 /// `|skew - skew_mean| - 0.6 / n - 4 |skew_mean| min(trigger / F_max, 1/4)`, `F_max` the
 /// pulse's own peak (which the detector's fit estimates); `None` below [`CHECKED_FROM`]
-/// samples above the trigger.
-fn sampled_excess(p: &Scaled, phase: f64, skew_mean: f64, check: &SkewCheck) -> Option<f64> {
+/// samples above the trigger. `above` is a scratch buffer for the samples above the trigger
+/// (its contents on entry do not matter), kept by the caller across phases.
+fn sampled_excess(
+    p: &Scaled,
+    phase: f64,
+    skew_mean: f64,
+    check: &SkewCheck,
+    above: &mut Vec<(f64, f64)>,
+) -> Option<f64> {
     let dt = 1.0 / check.sample_rate_hz;
     let scale = p.force * check.counts_per_n;
     let length_s = p.shape.length_s() * p.time;
-    let mut above = Vec::new();
+    above.clear();
     let mut k = 0.0;
     while (k + phase) * dt < length_s {
         let v = scale * p.shape.at((k + phase) * dt / p.time);
@@ -268,7 +277,7 @@ fn sampled_excess(p: &Scaled, phase: f64, skew_mean: f64, check: &SkewCheck) -> 
     if n < CHECKED_FROM {
         return None;
     }
-    let skew = weighted_skewness(&above);
+    let skew = weighted_skewness(above);
     let cut = check.trigger_counts / (scale * p.shape.peak_n);
     let allowed = 0.6 / n as f64 + 4.0 * skew_mean.abs() * cut.min(0.25);
     Some((skew - skew_mean).abs() - allowed)
