@@ -10,7 +10,8 @@
 //!   (see `host_sim::caving`, `docs/caving.md`);
 //! - `host-sim identify`: the beam's modes and the accelerometer's resonance estimated from a
 //!   recorded stream (see `host_sim::identify`; the band from the pulses' Hertz shape with
-//!   `--hertz-pulses`), printed as a `[sensor]` table;
+//!   `--hertz-pulses`, or a restitution law's with `--pulse-law`), printed as a `[sensor]`
+//!   table;
 //! - `host-sim export`: a scene file as Rust source for a firmware (see `host_sim::export`);
 //! - `host-sim plasticity`: elastic against yielding contacts of a scene's classes (see
 //!   `host_sim::plasticity`, `docs/plasticity.md`);
@@ -23,6 +24,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use host_sim::generate::generate_with_progress;
+use host_sim::law_spec::LawSpec;
 use host_sim::scene::{self, SceneFile};
 use host_sim::stream::{FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamOptions};
 use host_sim::stream_file::write_stream;
@@ -92,22 +94,53 @@ struct IdentifyArgs {
     /// The contact is undamped Hertz (`law = "hertz"`): fit the accelerometer's band to the
     /// pulses' known shape rather than to its ring after them (with --accelerometer; for a
     /// band too damped to ring, such as a MEMS part's).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "pulse_law")]
     hertz_pulses: bool,
+    /// The contact law whose pulse shape the band is fitted to, as a scene's `[contact] law`
+    /// names it: hertz (as --hertz-pulses), hunt_crossley, lankarani_nikravesh, flores,
+    /// gonthier or tsuji (with --restitution and --accelerometer).
+    #[arg(long)]
+    pulse_law: Option<String>,
+    /// The restitution of --pulse-law, in (0, 1].
+    #[arg(long, requires = "pulse_law")]
+    restitution: Option<f64>,
     /// Noise RMS in counts (default: estimated from the stream).
     #[arg(long)]
     noise_rms: Option<f64>,
 }
 
 impl IdentifyArgs {
-    fn options(&self) -> host_sim::identify::IdentifyOptions {
-        host_sim::identify::IdentifyOptions {
+    fn options(&self) -> Result<host_sim::identify::IdentifyOptions> {
+        Ok(host_sim::identify::IdentifyOptions {
             sample_rate_hz: self.sample_rate,
             modes: self.modes,
             accelerometer: self.accelerometer,
-            hertz_pulses: self.hertz_pulses,
+            pulse_law: self.pulse_law()?,
             noise_rms_counts: self.noise_rms,
+        })
+    }
+
+    /// The law of `--hertz-pulses` or `--pulse-law NAME --restitution E`, if either is given.
+    fn pulse_law(&self) -> Result<Option<LawSpec>> {
+        let Some(name) = self.pulse_law.as_deref() else {
+            return Ok(self.hertz_pulses.then_some(LawSpec::Hertz));
+        };
+        if name == "hertz" {
+            return Ok(Some(LawSpec::Hertz));
         }
+        if LawSpec::restitution_law(name, 1.0).is_none() {
+            anyhow::bail!(
+                "--pulse-law {name}: expected hertz, hunt_crossley, lankarani_nikravesh, \
+                 flores, gonthier or tsuji"
+            );
+        }
+        let Some(e) = self.restitution else {
+            anyhow::bail!("--pulse-law {name}: give its --restitution too");
+        };
+        if !(e > 0.0 && e <= 1.0) {
+            anyhow::bail!("--restitution must be in (0, 1] (got {e})");
+        }
+        Ok(LawSpec::restitution_law(name, e))
     }
 }
 
@@ -126,7 +159,7 @@ fn run_identify(args: &IdentifyArgs) -> Result<()> {
         .chunks_exact(2)
         .map(|b| i16::from_le_bytes([b[0], b[1]]))
         .collect();
-    let id = host_sim::identify::identify(&samples, &args.options())
+    let id = host_sim::identify::identify(&samples, &args.options()?)
         .with_context(|| format!("identifying the chain from {}", args.stream.display()))?;
     print!("{}", id.to_toml());
     Ok(())
@@ -427,11 +460,44 @@ mod tests {
         let Command::Identify(args) = cli.command else {
             panic!("not the identify command");
         };
-        let o = args.options();
+        let o = args.options().expect("valid");
         assert_eq!(o.sample_rate_hz, 26667.0);
         assert_eq!(o.modes, Some(2));
         assert!(o.accelerometer);
-        assert!(o.hertz_pulses);
+        assert_eq!(o.pulse_law, Some(LawSpec::Hertz));
         assert_eq!(o.noise_rms_counts, None);
+    }
+
+    /// `--pulse-law NAME --restitution E` gives that law; a name not in the list, a missing or
+    /// out-of-range restitution, or both shape flags are errors that name the flag.
+    #[test]
+    fn identify_pulse_law_flags() {
+        let options = |extra: &[&str]| {
+            let mut argv = vec!["host-sim", "identify", "--stream", "a.bin"];
+            argv.extend(["--sample-rate", "26667", "--accelerometer"]);
+            argv.extend(extra);
+            let cli = Cli::try_parse_from(argv).map_err(|e| e.to_string())?;
+            let Command::Identify(args) = cli.command else {
+                panic!("not the identify command");
+            };
+            args.options().map_err(|e| e.to_string())
+        };
+        let o = options(&["--pulse-law", "flores", "--restitution", "0.5"]).expect("valid");
+        assert_eq!(o.pulse_law, Some(LawSpec::Flores { restitution: 0.5 }));
+        assert_eq!(
+            options(&["--pulse-law", "hertz"]).expect("valid").pulse_law,
+            Some(LawSpec::Hertz)
+        );
+        assert_eq!(options(&[]).expect("valid").pulse_law, None);
+        let e = options(&["--pulse-law", "granite", "--restitution", "0.5"]).unwrap_err();
+        assert!(e.starts_with("--pulse-law granite"), "{e}");
+        let e = options(&["--pulse-law", "adams"]).unwrap_err();
+        assert!(e.starts_with("--pulse-law adams: expected"), "{e}");
+        let e = options(&["--pulse-law", "tsuji"]).unwrap_err();
+        assert!(e.contains("--restitution"), "{e}");
+        let e = options(&["--pulse-law", "tsuji", "--restitution", "1.5"]).unwrap_err();
+        assert!(e.starts_with("--restitution"), "{e}");
+        let e = options(&["--hertz-pulses", "--pulse-law", "flores"]).unwrap_err();
+        assert!(e.contains("--pulse-law"), "{e}");
     }
 }

@@ -4,10 +4,10 @@
 pub mod band_fit;
 pub mod faults;
 pub mod generate;
-pub mod hertz_response;
 pub mod identify;
 pub mod identify_tolerance;
 pub mod par;
+pub mod pulse_response;
 pub mod sensor;
 pub mod stream;
 pub mod stream_file;

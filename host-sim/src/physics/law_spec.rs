@@ -199,6 +199,30 @@ impl LawSpec {
         })
     }
 
+    /// `true` for a law whose force pulse, scaled to unit peak and contact time, is one shape
+    /// for every size, speed and material: undamped Hertz and the restitution-parametrised
+    /// laws at a given restitution (their damping is `chi(e) delta_dot / u`, dimensionless in
+    /// the scaled time; Tsuji's `beta(e)` likewise). Not Adams' fixed `c_max` (its damping
+    /// ratio changes with size and speed), nor a per-impact `c_max`, nor a yielding contact.
+    ///
+    /// ```
+    /// use host_sim::law_spec::LawSpec;
+    /// assert!(LawSpec::Hertz.self_similar());
+    /// assert!(LawSpec::Tsuji { restitution: 0.4 }.self_similar());
+    /// assert!(!LawSpec::Adams { c_max_n_s_m: 687.0, d_m: 1e-5 }.self_similar());
+    /// ```
+    pub fn self_similar(&self) -> bool {
+        matches!(
+            self,
+            Self::Hertz
+                | Self::HuntCrossley { .. }
+                | Self::LankaraniNikravesh { .. }
+                | Self::Flores { .. }
+                | Self::Gonthier { .. }
+                | Self::Tsuji { .. }
+        )
+    }
+
     /// The restitution model and target `e` of a law of the restitution form `(1 + chi
     /// delta_dot / u)` (Hunt-Crossley, Lankarani-Nikravesh, Flores, Gonthier), else `None`.
     pub fn restitution_damping(&self) -> Option<(RestitutionModel, f64)> {

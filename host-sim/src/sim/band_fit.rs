@@ -1,9 +1,10 @@
 //! Fits the accelerometer band's frequency and damping ratio to the pulses of a stream whose
-//! contact is undamped Hertz (`host-sim identify --hertz-pulses`).
+//! contact law's pulse shape is known and the same for every impact: undamped Hertz
+//! (`host-sim identify --hertz-pulses`) or a restitution-parametrised law (`--pulse-law`).
 //!
 //! Each pulse `k` (samples `d_kn`, counts, with the ring of the impacts before it removed) is
-//! modelled as `F_k r_n(t_0k, t_ck; f_a, zeta_a)`, `r` the unit Hertz pulse through the whole
-//! chain, the identified beam modes and the band ([`crate::sim::hertz_response`]). The cost
+//! modelled as `F_k r_n(t_0k, t_ck; f_a, zeta_a)`, `r` the law's unit pulse through the whole
+//! chain, the identified beam modes and the band ([`crate::sim::pulse_response`]). The cost
 //! `S(f_a, zeta_a) = sum_k min_(F, t_0, t_c) sum_n (d_kn - F r_n)^2` (counts^2) profiles the
 //! pulse's own parameters out: `F` in closed form (`F = <r, d> / <r, r>`, the model is linear
 //! in it), `(t_0, t_c)` by Levenberg-Marquardt on that projected residual (derivatives by
@@ -14,9 +15,9 @@
 
 use rayon::prelude::*;
 
-use crate::physics::hertz64::C_AREA;
+use crate::physics::law_spec::LawSpec;
 use crate::scene::{BeamMode, Resonance};
-use crate::sim::hertz_response::{ChainModel, PulseTiming, unit_hertz_pulse};
+use crate::sim::pulse_response::{ChainModel, PulseTiming, unit_area, unit_pulse};
 use crate::sim::sensor::ForcePulse;
 
 /// Groups of the jackknife (as the modes').
@@ -68,9 +69,11 @@ struct PulseFit {
 /// Which jackknife groups a cost takes.
 type Keep = dyn Fn(usize) -> bool + Sync;
 
-/// The shared model: unit pulse, the beam's modes, the data, the sample rate (Hz).
+/// The shared model: unit pulse and its area constant, the beam's modes, the data, the sample
+/// rate (Hz).
 struct Problem<'a> {
     unit: ForcePulse,
+    area: f64,
     modes: &'a [BeamMode],
     pulses: &'a [BandPulse],
     fs: f64,
@@ -101,9 +104,9 @@ fn residual(band: &ChainModel, unit: &ForcePulse, d: &[f64], timing: PulseTiming
 }
 
 /// A first guess from the samples: the peak, the contact time from the area over the peak
-/// (`area = C_AREA F_max t_c`) and the onset half a contact and the band's delay `2 zeta / w`
-/// before the peak.
-fn first_guess(d: &[f64], fs: f64, delay_s: f64) -> PulseTiming {
+/// (`area = c F_max t_c`, `c` the unit pulse's area, [`unit_area`]) and the onset half a
+/// contact and the band's delay `2 zeta / w` before the peak.
+fn first_guess(d: &[f64], fs: f64, delay_s: f64, c: f64) -> PulseTiming {
     let (np, peak) =
         d.iter().enumerate().fold(
             (0, 0.0f64),
@@ -111,7 +114,7 @@ fn first_guess(d: &[f64], fs: f64, delay_s: f64) -> PulseTiming {
         );
     let area: f64 = d.iter().sum::<f64>() / fs;
     let tc = if peak != 0.0 {
-        (area / (peak * C_AREA)).clamp(0.5 / fs, 40.0 / fs)
+        (area / (peak * c)).clamp(0.5 / fs, 40.0 / fs)
     } else {
         1.0 / fs
     };
@@ -184,8 +187,10 @@ impl Problem<'_> {
             .zip(self.pulses.par_iter())
             .filter(|(_, p)| keep(p.group))
             .map(|(fit, p)| {
-                let start =
-                    fit.map_or_else(|| first_guess(&p.samples, self.fs, delay), |q| q.timing);
+                let start = fit.map_or_else(
+                    || first_guess(&p.samples, self.fs, delay, self.area),
+                    |q| q.timing,
+                );
                 let done = fit_pulse(&band, &self.unit, &p.samples, start);
                 *fit = Some(done);
                 done.sse
@@ -291,14 +296,22 @@ impl Problem<'_> {
     }
 }
 
-/// The band fitted to `pulses` (sample rate `sample_rate_hz`, Hz) with its leave-one-group-out
-/// fits; `None` without pulses or when the Hertz shape cannot be tabulated.
-pub fn fit_band(pulses: &[BandPulse], modes: &[BeamMode], sample_rate_hz: f64) -> Option<BandFit> {
+/// The band fitted to `pulses` (sample rate `sample_rate_hz`, Hz) of the contact law `law`
+/// with its leave-one-group-out fits; `None` without pulses or when the law's shape cannot be
+/// tabulated (a law whose shape changes with the impact, [`LawSpec::self_similar`]).
+pub fn fit_band(
+    pulses: &[BandPulse],
+    modes: &[BeamMode],
+    sample_rate_hz: f64,
+    law: LawSpec,
+) -> Option<BandFit> {
     if pulses.is_empty() {
         return None;
     }
+    let unit = unit_pulse(law)?;
     let problem = Problem {
-        unit: unit_hertz_pulse()?,
+        area: unit_area(&unit),
+        unit,
         modes,
         pulses,
         fs: sample_rate_hz,

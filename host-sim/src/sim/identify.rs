@@ -69,10 +69,11 @@
 //!    if its jackknife errors are within 1 % (frequency) and 20 % (damping); otherwise the
 //!    output says it is not identified and the datasheet's value stays.
 //!
-//!    4b. **Band from the pulses' shape** (`--hertz-pulses`, with `--accelerometer`): when
-//!    the contact is undamped Hertz, a pulse's force is `F_max h((t - t_0) / t_c)` with `h`
-//!    known ([`crate::sim::hertz_response`]), so the band need not ring to be seen: it shapes
-//!    the pulse. Every pulse with free windows on both sides and no sample on a rail (two or more
+//!    4b. **Band from the pulses' shape** (`--hertz-pulses` or `--pulse-law LAW
+//!    --restitution E`, with `--accelerometer`): when the contact is undamped Hertz or a
+//!    restitution-parametrised law, a pulse's force is `F_max h((t - t_0) / t_c)` with `h`
+//!    known and the same for every impact ([`crate::sim::pulse_response`]), so the band need
+//!    not ring to be seen: it shapes the pulse. Every pulse with free windows on both sides and no sample on a rail (two or more
 //!    samples at the stream's lowest or highest code) is taken from 4 samples before its
 //!    first flag to the free window after it, the ring before it removed (as in step 3), and
 //!    fitted by that pulse through the chain: the modes just identified (frequency, damping,
@@ -129,6 +130,7 @@
 
 use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
 
+use crate::physics::law_spec::LawSpec;
 use crate::scene::BeamMode;
 use crate::sim::band_fit::{BandPulse, fit_band};
 use crate::sim::identify_tolerance::{
@@ -185,9 +187,11 @@ pub struct IdentifyOptions {
     pub modes: Option<usize>,
     /// Also estimate the accelerometer's resonance.
     pub accelerometer: bool,
-    /// The contact is undamped Hertz: fit the accelerometer's band to the pulses' shape
-    /// (step 4b of the module docs) instead of its ring after them. Needs `accelerometer`.
-    pub hertz_pulses: bool,
+    /// The contact law whose pulse shape is known (undamped Hertz, or a restitution-parametrised
+    /// law at its restitution: [`LawSpec::self_similar`]): fit the accelerometer's band to the
+    /// pulses' shape (step 4b of the module docs) instead of its ring after them. Needs
+    /// `accelerometer`. `None`: from the ring.
+    pub pulse_law: Option<LawSpec>,
     /// Noise RMS in counts (`None`: estimated from the stream).
     pub noise_rms_counts: Option<f64>,
 }
@@ -237,9 +241,9 @@ pub struct ResonanceEstimate {
 pub enum ResonanceSource {
     /// Its ring right after the pulses (step 4).
     Ring,
-    /// The pulses themselves, fitted as Hertz pulses through the band (step 4b,
-    /// `--hertz-pulses`).
-    HertzPulses,
+    /// The pulses themselves, fitted with the contact law's shape through the band (step 4b,
+    /// `--hertz-pulses` or `--pulse-law`).
+    Pulses,
 }
 
 /// What `identify` found.
@@ -267,8 +271,8 @@ pub struct Identification {
     pub accelerometer: Option<ResonanceEstimate>,
     /// `true` when the resonance was asked for.
     pub accelerometer_asked: bool,
-    /// `true` when it was to be fitted to the pulses' Hertz shape (`--hertz-pulses`).
-    pub hertz_pulses_asked: bool,
+    /// The law whose pulse shape the band was to be fitted to (`--hertz-pulses`, `--pulse-law`).
+    pub pulse_law: Option<LawSpec>,
 }
 
 /// Why a stream cannot be identified.
@@ -715,11 +719,21 @@ fn validate_identify(opts: &IdentifyOptions) -> Result<(), IdentifyError> {
     if opts.modes == Some(0) {
         return Err(invalid("--modes", "must be at least 1".to_string()));
     }
-    if opts.hertz_pulses && !opts.accelerometer {
-        return Err(invalid(
-            "--hertz-pulses",
-            "fits the accelerometer's band to the pulses: give --accelerometer too".to_string(),
-        ));
+    if let Some(law) = opts.pulse_law {
+        if !opts.accelerometer {
+            return Err(invalid(
+                "--hertz-pulses / --pulse-law",
+                "fits the accelerometer's band to the pulses: give --accelerometer too".to_string(),
+            ));
+        }
+        if !law.self_similar() {
+            return Err(invalid(
+                "--pulse-law",
+                "needs a law whose pulse has one shape for every impact: hertz, hunt_crossley, \
+                 lankarani_nikravesh, flores, gonthier or tsuji"
+                    .to_string(),
+            ));
+        }
     }
     Ok(())
 }
@@ -975,7 +989,12 @@ impl Rings<'_> {
     /// Step 4b of the module docs: the band fitted to the pulses (earlier ring removed) that are not
     /// clipped (no sample on a rail of `samples`, [`rails`]), identified only within the
     /// jackknife bounds of step 4.
-    fn band_from_pulses(&self, samples: &[i16], modes: &[BeamMode]) -> Option<ResonanceEstimate> {
+    fn band_from_pulses(
+        &self,
+        samples: &[i16],
+        modes: &[BeamMode],
+        law: LawSpec,
+    ) -> Option<ResonanceEstimate> {
         let (lo, hi) = rails(samples);
         let pulses: Vec<BandPulse> = (0..self.pulses.len())
             .filter_map(|k| {
@@ -988,14 +1007,9 @@ impl Rings<'_> {
                 })
             })
             .collect();
-        let fit = fit_band(&pulses, modes, self.fs)?;
+        let fit = fit_band(&pulses, modes, self.fs, law)?;
         let full = (fit.frequency_hz, fit.damping_ratio);
-        within_bounds(
-            full,
-            &fit.leave_out,
-            fit.pulses,
-            ResonanceSource::HertzPulses,
-        )
+        within_bounds(full, &fit.leave_out, fit.pulses, ResonanceSource::Pulses)
     }
 }
 
@@ -1195,7 +1209,7 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
     };
     let steps: Vec<ModeStep> = modes_fz.iter().map(|&(f, z)| mode_step(f, z, fs)).collect();
     let (gains, per_pulse) = rings.gains(&steps)?;
-    let accel = if opts.hertz_pulses {
+    let accel = if let Some(law) = opts.pulse_law {
         let modes: Vec<BeamMode> = modes_fz
             .iter()
             .zip(&gains)
@@ -1217,7 +1231,7 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
             fits: &fits_quiet,
             ..rings
         };
-        quiet.band_from_pulses(samples, &modes)
+        quiet.band_from_pulses(samples, &modes, law)
     } else {
         accel
     };
@@ -1235,7 +1249,7 @@ pub fn identify(samples: &[i16], opts: &IdentifyOptions) -> Result<Identificatio
         modes: jackknifed_modes(&grams, &modes_fz, &gains, &per_pulse),
         accelerometer: accel,
         accelerometer_asked: opts.accelerometer,
-        hertz_pulses_asked: opts.hertz_pulses,
+        pulse_law: opts.pulse_law,
     })
 }
 
@@ -1434,7 +1448,7 @@ impl Identification {
             Some(a) => {
                 let floor = match a.source {
                     ResonanceSource::Ring => RING_FLOOR,
-                    ResonanceSource::HertzPulses => BAND_FIT_FLOOR,
+                    ResonanceSource::Pulses => BAND_FIT_FLOOR,
                 };
                 tolerance::resonance_tolerance(
                     [a.frequency_hz, a.damping_ratio].map(Estimate::pair),
@@ -1470,9 +1484,9 @@ impl Identification {
                 "accelerometer_tolerance = {{ frequency = {f}, damping = {z} }}  # {why}\n"
             ));
         }
-        if self.hertz_pulses_asked && self.accelerometer.is_none() {
+        if self.pulse_law.is_some() && self.accelerometer.is_none() {
             s.push_str(
-                "# accelerometer: not identified: the band fitted to the Hertz pulses scatters \
+                "# accelerometer: not identified: the band fitted to the pulses' shape scatters \
                  between groups beyond\n# 1 % in frequency or 20 % in damping. Keep the \
                  datasheet's value.\n",
             );
@@ -1487,7 +1501,10 @@ impl Identification {
         if let Some(a) = &self.accelerometer {
             let from = match a.source {
                 ResonanceSource::Ring => "rings",
-                ResonanceSource::HertzPulses => "Hertz pulses fitted",
+                ResonanceSource::Pulses if self.pulse_law == Some(LawSpec::Hertz) => {
+                    "Hertz pulses fitted"
+                }
+                ResonanceSource::Pulses => "pulses fitted with the law's shape",
             };
             s.push_str(&format!(
                 "accelerometer = {{ frequency_hz = {}, damping_ratio = {} }}  # +- {:.3} Hz, \

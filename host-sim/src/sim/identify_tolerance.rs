@@ -22,7 +22,9 @@ pub const TOLERANCE_FLOOR: [f64; 3] = [2e-3, 0.15, 0.05];
 /// Hertz pulses (`--hertz-pulses`): on host-sim's MEMS streams at 60-240 impacts it comes
 /// within -0.035 to +0.16 % in frequency and -0.02 to +0.05 % in damping, the frequency a
 /// little above its jackknife error (0.17-0.43 % low and 0.05-0.31 % low in damping before
-/// the pulses were taken about the quiet level rather than the median).
+/// the pulses were taken about the quiet level rather than the median). The same floor
+/// stands for a restitution law's pulses (`--pulse-law`): Flores e 0.5 on one such stream
+/// came within -0.023 % and +0.000 % (`docs/chain.md`).
 pub const BAND_FIT_FLOOR: [f64; 2] = [5e-3, 1e-2];
 
 /// The smallest relative tolerance stated for `[frequency, damping]` of a resonance found from
