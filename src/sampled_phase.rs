@@ -93,6 +93,59 @@ impl SampledPhase {
         ))
     }
 
+    /// Adds `by_n` (a correction by samples per pulse alone, such as the equaliser's residual,
+    /// [`crate::chain_residual`]) read at each row's `n_k` to every cell of the row: its means
+    /// to the means (held within `|ln| <= 2`), its spreads in quadrature to the spreads (at
+    /// most 2). [`SampledPhase::NONE`] stays.
+    ///
+    /// ```
+    /// use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS, SampledPhase};
+    /// use coalshock::SampledCalibration;
+    /// let mut table = SampledPhase {
+    ///     asymmetry: [[-0.5, 0.5]; PHASE_ROWS],
+    ///     sigma_ln_force: [[0.03; PHASE_COLUMNS]; PHASE_ROWS],
+    ///     ..SampledPhase::NONE
+    /// };
+    /// // -0.05 in ln F and 0.04 of spread at every n.
+    /// let by_n = SampledCalibration {
+    ///     ln_force: [-0.05; 8],
+    ///     sigma_ln_force: [0.04; 8],
+    ///     ..SampledCalibration::NONE
+    /// };
+    /// table.add_by_row(&by_n);
+    /// assert!((table.ln_force[3][2] + 0.05).abs() < 1e-6);
+    /// assert!((table.sigma_ln_force[9][7] - 0.05).abs() < 1e-6);
+    /// let mut none = SampledPhase::NONE;
+    /// none.add_by_row(&by_n);
+    /// assert_eq!(none, SampledPhase::NONE);
+    /// ```
+    pub fn add_by_row(&mut self, by_n: &crate::SampledCalibration) {
+        if *self == Self::NONE {
+            return;
+        }
+        let mut n = PHASE_FIRST_N;
+        for k in 0..PHASE_ROWS {
+            let (lf, lt, sf, st) = by_n.at(libm::logf(n));
+            for c in 0..PHASE_COLUMNS {
+                let add = |v: &mut [[f32; PHASE_COLUMNS]; PHASE_ROWS], d: f32| {
+                    if let Some(x) = v.get_mut(k).and_then(|r| r.get_mut(c)) {
+                        *x = (*x + d).clamp(-2.0, 2.0);
+                    }
+                };
+                add(&mut self.ln_force, lf);
+                add(&mut self.ln_duration, lt);
+                let quad = |v: &mut [[f32; PHASE_COLUMNS]; PHASE_ROWS], d: f32| {
+                    if let Some(x) = v.get_mut(k).and_then(|r| r.get_mut(c)) {
+                        *x = libm::sqrtf(*x * *x + d * d).min(2.0);
+                    }
+                };
+                quad(&mut self.sigma_ln_force, sf);
+                quad(&mut self.sigma_ln_duration, st);
+            }
+            n *= PHASE_STEP;
+        }
+    }
+
     /// `Err` unless every axis lies within `-1..=1` in order, every mean within `|ln| <= 2`
     /// and every spread within `0..=2`.
     pub fn check(&self) -> Result<(), Error> {

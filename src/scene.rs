@@ -400,7 +400,8 @@ pub struct Scene<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> 
 impl<const N: usize, M: Backend> Scene<N, M> {
     /// Builds a scene and precomputes every class's envelope and the separability, and behind a
     /// chain that is not rigid the bias its equaliser leaves in short pulses
-    /// ([`crate::chain_residual`], folded into `settings.contact.sampled`).
+    /// ([`crate::chain_residual`], folded into `settings.contact.sampled` and the rows of
+    /// `settings.sampled_phase`).
     ///
     /// Refuses, with a typed [`Error`]: invalid materials, ranges or sensor settings; fewer than
     /// two classes or more than `N`; any corner of any envelope whose peak force or duration
@@ -556,9 +557,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         &self.chain_bias
     }
 
-    /// The settings as given, but for `contact.sampled` behind a chain that is not rigid: the
-    /// bias the equaliser leaves in short pulses ([`crate::chain_residual`]) is added to it
-    /// ([`SampledCalibration::combined`]).
+    /// The settings as given, but for `contact.sampled` and `sampled_phase` behind a chain that
+    /// is not rigid: the bias the equaliser leaves in short pulses ([`crate::chain_residual`])
+    /// is added to them ([`SampledCalibration::combined`], [`SampledPhase::add_by_row`]).
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
@@ -936,10 +937,13 @@ impl<M: Backend> Scene<DEFAULT_CLASSES, M> {
 }
 
 /// Adds the bias the equaliser of `sensor` leaves in short pulses
-/// ([`crate::chain_residual`]) to the settings' sampling correction. Not inlined: a rigid
-/// scene's build never calls it and must not carry its frame.
+/// ([`crate::chain_residual`]) to the settings' sampling correction, and to the rows of its
+/// phase table where it has one (the table, where it reads, takes the correction's place).
+/// Not inlined: a rigid scene's build never calls it and must not carry its frame.
 #[inline(never)]
 fn add_residual(settings: &mut Settings, sensor: &SensorChain) {
     let r = sensor.dynamics.residual_at(sensor.sample_rate_hz);
     settings.contact.sampled = settings.contact.sampled.combined(&r);
+    #[cfg(feature = "sampled_phase")]
+    settings.sampled_phase.add_by_row(&r);
 }

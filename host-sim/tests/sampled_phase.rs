@@ -254,3 +254,41 @@ fn means_fitted_as_read_leave_less_on_an_unseen_impact() {
         }
     }
 }
+
+/// Damped contact behind a chain: the equaliser's residual in a short pulse
+/// (`coalshock::chain_residual`) is added to the phase table's rows as it is to the correction
+/// by samples per pulse. `scenes/mems_chain.toml` with Flores e 0.5 and the tolerances
+/// `host-sim identify` prints for it (n 1500, seed 3): the located `ln u` had a root mean
+/// square `z` of 7.0 and 1.17 % confident errors while the table was read without the residual
+/// (the kernel 3.0 pp below the reference); with it 4.2, 0.71 % and 1.2 pp. The residual is
+/// computed for the Hertz pulse, not the damped one, so the stated noise is still too narrow
+/// there (`docs/chain.md`, "Not covered yet").
+#[test]
+fn damped_pulses_behind_the_mems_band_carry_the_equaliser_residual() {
+    use host_sim::scene::{AccelerometerToleranceSpec, ChainToleranceSpec};
+    let mut scene = shipped("mems_chain");
+    scene.contact = host_sim::law_spec::LawSpec::Flores { restitution: 0.5 };
+    scene.sensor.chain_tolerance = Some(ChainToleranceSpec {
+        frequency: 0.002,
+        damping: 0.15,
+        gain: 0.05,
+    });
+    scene.sensor.accelerometer_tolerance = Some(AccelerometerToleranceSpec {
+        frequency: 0.005,
+        damping: 0.01,
+    });
+    let opts = EvalOptions {
+        n_per_class: 1500,
+        seed: 3,
+        ..EvalOptions::default()
+    };
+    let e = evaluate::<DefaultBackend>(&scene, &opts).unwrap();
+    let z = e.noise.stated_noise_check.ln_speed.rms;
+    println!(
+        "mems_chain, Flores e 0.5: z ln u {z:.2}, confident errors {:.4}, kernel - reference {:.4}",
+        e.confident_error_rate,
+        e.forced_choice_accuracy - e.reference.accuracy
+    );
+    assert!(z < 5.5, "{z}");
+    assert!(e.confident_error_rate <= 0.01);
+}
