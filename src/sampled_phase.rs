@@ -123,26 +123,27 @@ impl SampledPhase {
         if *self == Self::NONE {
             return;
         }
+        // `by_n` at each row's `n_k = PHASE_FIRST_N * PHASE_STEP^k`.
         let mut n = PHASE_FIRST_N;
-        for k in 0..PHASE_ROWS {
-            let (lf, lt, sf, st) = by_n.at(libm::logf(n));
-            for c in 0..PHASE_COLUMNS {
-                let add = |v: &mut [[f32; PHASE_COLUMNS]; PHASE_ROWS], d: f32| {
-                    if let Some(x) = v.get_mut(k).and_then(|r| r.get_mut(c)) {
-                        *x = (*x + d).clamp(-2.0, 2.0);
-                    }
-                };
-                add(&mut self.ln_force, lf);
-                add(&mut self.ln_duration, lt);
-                let quad = |v: &mut [[f32; PHASE_COLUMNS]; PHASE_ROWS], d: f32| {
-                    if let Some(x) = v.get_mut(k).and_then(|r| r.get_mut(c)) {
-                        *x = libm::sqrtf(*x * *x + d * d).min(2.0);
-                    }
-                };
-                quad(&mut self.sigma_ln_force, sf);
-                quad(&mut self.sigma_ln_duration, st);
-            }
+        let by_row: [(f32, f32, f32, f32); PHASE_ROWS] = core::array::from_fn(|_| {
+            let at = by_n.at(libm::logf(n));
             n *= PHASE_STEP;
+            at
+        });
+        let rows = self
+            .ln_force
+            .iter_mut()
+            .zip(&mut self.ln_duration)
+            .zip(&mut self.sigma_ln_force)
+            .zip(&mut self.sigma_ln_duration)
+            .zip(&by_row);
+        let add = |x: &mut f32, d: f32| *x = (*x + d).clamp(-2.0, 2.0);
+        let quad = |x: &mut f32, d: f32| *x = libm::sqrtf(*x * *x + d * d).min(2.0);
+        for ((((f, t), s_f), s_t), &(lf, lt, sf, st)) in rows {
+            f.iter_mut().for_each(|x| add(x, lf));
+            t.iter_mut().for_each(|x| add(x, lt));
+            s_f.iter_mut().for_each(|x| quad(x, sf));
+            s_t.iter_mut().for_each(|x| quad(x, st));
         }
     }
 
