@@ -16,7 +16,7 @@
 //!   rows (`phase_calibration_on_rows`), for Flores e 0.5, Tsuji e 0.3 and Hunt-Crossley e 0.9.
 
 use coalshock::math::DefaultBackend;
-use host_sim::calibrate::{C_AREA, fit_sampled_at};
+use host_sim::calibrate::{C_AREA, area_energy_peak, fit_sampled_at};
 use host_sim::evaluate::{EvalOptions, evaluate};
 use host_sim::hertz64::Material64;
 use host_sim::impact::{ImpactSpec, simulate};
@@ -42,12 +42,20 @@ fn integrated(scene: &SceneFile, radius_m: f64, speed_m_s: f64) -> (Vec<(f64, f6
     spec.law = scene.class_law(0).unwrap();
     spec.record = Some(spec.hertz().unwrap().duration_s / 4000.0);
     let series = simulate(&spec).unwrap().force_series.unwrap();
-    let peak = series.iter().map(|p| p.1).fold(0.0, f64::max);
-    let area: f64 = series
-        .windows(2)
-        .map(|w| 0.5 * (w[1].0 - w[0].0) * (w[0].1.max(0.0) + w[1].1.max(0.0)))
-        .sum();
+    let (area, _, peak) = area_energy_peak(&series);
     (series, peak, area / (C_AREA * peak))
+}
+
+/// The `ln n` at which the kernel reads `table` for a pulse measured `samples` long with
+/// asymmetry `a`: two fixed-point steps of `ln n = ln n_measured - ln_duration(ln n, a)`
+/// (`coalshock::Scene::hertz_equivalent`).
+fn kernel_ln_n(table: &coalshock::SampledPhase, samples: f64, a: f64) -> f32 {
+    let ln_measured = (samples as f32).ln();
+    let mut ln_n = ln_measured;
+    for _ in 0..2 {
+        ln_n = ln_measured - table.at(ln_n, a as f32).unwrap().1;
+    }
+    ln_n
 }
 
 fn rms(v: &[f64]) -> f64 {
@@ -79,11 +87,7 @@ fn phase_table_corrects_unseen_phases_of_an_unseen_impact() {
             // The duration means are those at the row's true n; the force means are fitted
             // to the kernel's reading, at the n two fixed-point steps infer from the
             // measured duration.
-            let ln_measured = (samples as f32).ln();
-            let mut ln_read = ln_measured;
-            for _ in 0..2 {
-                ln_read = ln_measured - table.at(ln_read, a as f32).unwrap().1;
-            }
+            let ln_read = kernel_ln_n(&table, samples, a);
             let (pf, _, sf, _) = table.at(ln_read, a as f32).unwrap();
             let (_, pt, _, st) = table.at(ln_n, a as f32).unwrap();
             let (qf, qt, _, _) = by_n.at(ln_n);
@@ -152,11 +156,7 @@ fn tsuji_residuals_between_rows_stay_within_the_stated_spread() {
         let dt = duration_s / n;
         for j in 0..23 {
             let (f, samples, a) = fit_sampled_at(&series, dt, (j as f64 + 0.29) / 23.0).unwrap();
-            let ln_measured = (samples as f32).ln();
-            let mut ln_n = ln_measured;
-            for _ in 0..2 {
-                ln_n = ln_measured - table.at(ln_n, a as f32).unwrap().1;
-            }
+            let ln_n = kernel_ln_n(&table, samples, a);
             let (pf, pt, sf, st) = table.at(ln_n, a as f32).unwrap();
             let (lf, lt) = ((f / peak_n).ln(), (samples * dt / duration_s).ln());
             zf.push((lf - f64::from(pf)) / f64::from(sf).max(1e-4));
@@ -198,11 +198,7 @@ fn left_as_read(
             if samples < f64::from(coalshock::scene::MIN_DURATION_SAMPLES) {
                 continue;
             }
-            let ln_measured = (samples as f32).ln();
-            let mut ln_n = ln_measured;
-            for _ in 0..2 {
-                ln_n = ln_measured - table.at(ln_n, a as f32).unwrap().1;
-            }
+            let ln_n = kernel_ln_n(table, samples, a);
             let (pf, pt, _, _) = table.at(ln_n, a as f32).unwrap();
             rf.push((f / peak_n).ln() - f64::from(pf));
             rt.push((samples * dt / duration_s).ln() - f64::from(pt));

@@ -19,7 +19,7 @@ use crate::physics::law_spec::LawSpec;
 use crate::scene::{BeamMode, Resonance, SensorSpec};
 use crate::sim::sensor::{ForcePulse, ForceSignal, PulseShape, Sensor};
 
-/// Points of the tabulated Hertz shape per contact time.
+/// Points of the tabulated unit pulse per contact time.
 pub const SHAPE_POINTS: f64 = 4096.0;
 
 /// The unit pulse of `law`: `h(x)` for `x` in `[0, 1]` (`F_max = 1`, `t_c = 1` the contact time
