@@ -608,7 +608,7 @@ fn main() {
         duration_s: duration,
     };
     let table = phase_calibration_on_rows(std::slice::from_ref(&pulse)).to_kernel();
-    let least_squares = phase_calibration(std::slice::from_ref(&pulse)).to_kernel();
+    let least_squares = phase_calibration(std::slice::from_ref(&pulse), None).to_kernel();
     let ns: Vec<f64> = (0..600)
         .map(|i| 1.6 * (5.0f64 / 1.6).powf(i as f64 / 599.0))
         .collect();

@@ -113,13 +113,15 @@ fn the_impulse_fixes_the_product_of_the_ratios() {
             "{law:?}: {product} against e = {e}"
         );
     }
-    let c = calibrate(&damped_scene()).unwrap().expect("a damped law");
+    let c = calibrate(&damped_scene(), None)
+        .unwrap()
+        .expect("a damped law");
     assert!(c.spread_ln.force < 1e-5 && c.spread_ln.duration < 1e-5);
     assert_eq!(c.impacts, 18);
     // Flores rises fast and decays slowly: strongly skewed, the same for every impact.
     assert!(c.skewness > 0.75 && c.skewness < 0.9, "{}", c.skewness);
     assert!(c.skewness_spread < 1e-3, "{}", c.skewness_spread);
-    assert!(calibrate(&SceneFile::paper()).unwrap().is_none());
+    assert!(calibrate(&SceneFile::paper(), None).unwrap().is_none());
     let s = calibrated_settings(&damped_scene()).unwrap();
     assert!((s.contact.force_ratio as f64 / c.ratios.force - 1.0).abs() < 1e-6);
 }
@@ -146,7 +148,7 @@ fn damped_scene_is_classified_once_calibrated() {
 #[test]
 fn adams_pulses_bend_sharply_and_the_spike_check_allows_for_it() {
     let adams = shipped("paper_adams");
-    let c = calibrate(&adams).unwrap().expect("a damped law");
+    let c = calibrate(&adams, None).unwrap().expect("a damped law");
     // The damping steps in within d = 0.01 mm: at 100 kS/s a sample sees the jump.
     assert!(c.sharpest_bend > 0.4, "{}", c.sharpest_bend);
     // Adams' pulse is mildly skewed, by an amount that varies with size and speed.
@@ -155,7 +157,9 @@ fn adams_pulses_bend_sharply_and_the_spike_check_allows_for_it() {
     let s = calibrated_settings(&adams).unwrap();
     assert!(s.spike_fraction as f64 >= 1.25 * c.sharpest_bend - 1e-6);
     // Flores ramps its damping with the penetration: its pulse bends less sharply.
-    let flores = calibrate(&damped_scene()).unwrap().expect("a damped law");
+    let flores = calibrate(&damped_scene(), None)
+        .unwrap()
+        .expect("a damped law");
     assert!(
         flores.sharpest_bend < 0.7 * c.sharpest_bend,
         "{} against {}",

@@ -44,3 +44,18 @@ fn compiled_node_scenes_equal_host_sim_scenes() {
         load("paper_yield")
     );
 }
+
+/// `export --out DIR/x.rs` creates a missing `DIR`, as `stream --out` does, and writes there
+/// what it would print (its header names the scene by the file name of an absolute path).
+#[test]
+fn export_creates_the_output_directory() {
+    let dir = std::env::temp_dir().join(format!("coalshock-export-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.join("nested").join("paper.rs");
+    let scene = root().join("scenes/paper.toml");
+    host_sim::export::run(&scene, Some(&out)).unwrap();
+    let written = std::fs::read_to_string(&out).unwrap();
+    let file = host_sim::scene::load(&scene).unwrap();
+    assert_eq!(written, scene_source(&file, "paper.toml").unwrap());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -192,7 +192,7 @@ fn damping_and_yield_combine() {
 fn calibration_follows_the_class_laws() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/paper_yield.toml");
     let s = scene::load(&path).expect("shipped scene");
-    let cal = calibrate(&s)
+    let cal = calibrate(&s, None)
         .expect("integrates")
         .expect("a yielding scene calibrates");
     println!(

@@ -22,6 +22,7 @@
 use coalshock::sampled_phase::PHASE_FIRST_N;
 use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 
+use crate::bridge::equalised_fit::EqualisedChain;
 use crate::bridge::sampled_fit::force_at;
 pub use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
 use crate::bridge::sampled_phase::{Phase64, phase_calibration};
@@ -134,7 +135,8 @@ pub struct Calibration64 {
     pub sampled: Option<Sampled64>,
     /// The damped contact's correction by samples per pulse and sampling phase
     /// ([`phase_calibration`]), with `sampled`; `None` for a contact of the Hertz law (a
-    /// yielding one).
+    /// yielding one). Behind a chain that is not rigid, fitted through it and less the
+    /// residual the kernel adds for it at build ([`Phase64::less_by_row`]).
     pub phase: Option<Phase64>,
     /// Mean skewness of the impacts' whole pulses (above 0.5 % of the peak; 0 for Hertz).
     pub skewness: f64,
@@ -349,8 +351,14 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
 /// The calibration of `scene`'s contact law, or `None` for the undamped Hertz law with no
 /// yielding class (the kernel's own model: every ratio is 1). Integrates each class, with its
 /// own law ([`SceneFile::class_law`]), at radius {min, geometric centre, max} x speed {min,
-/// centre, max}.
-pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
+/// centre, max}. A damped contact's phase table is fitted through `chain`, the scene's chain
+/// and the kernel's equaliser, when it is not rigid (`None`: as sampled on a rigid beam), and
+/// then holds that chain's residual less the one the kernel adds at build
+/// ([`Phase64::less_by_row`]).
+pub fn calibrate(
+    scene: &SceneFile,
+    chain: Option<&EqualisedChain>,
+) -> Result<Option<Calibration64>, SimError> {
     if scene.contact == LawSpec::Hertz && !scene.yields() {
         return Ok(None);
     }
@@ -366,8 +374,8 @@ pub fn calibrate(scene: &SceneFile) -> Result<Option<Calibration64>, SimError> {
     } = integrate_grid(scene)?;
     let fs = scene.sensor.sample_rate_hz;
     let damped = scene.contact != LawSpec::Hertz;
-    let sampled_fit =
-        (shortest_s * fs < SMOOTH_FROM_SAMPLES).then(|| sampled_of_grid(&all, &pulses, damped));
+    let sampled_fit = (shortest_s * fs < SMOOTH_FROM_SAMPLES)
+        .then(|| sampled_of_grid(&all, &pulses, damped, chain));
     let (sampled_fit, phase) = sampled_fit.map_or((None, None), |(s, p)| (Some(s), p));
     let n = all.len() as f64;
     let skew_mean = skews.iter().sum::<f64>() / n;
@@ -468,11 +476,13 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
 
 /// [`sampled_calibration`] of the grid's pulses: their series (`all`) with their peak force
 /// (N) and duration from the area (s) (`pulses`); for a damped contact (`damped`) also the
-/// correction by samples per pulse and sampling phase ([`phase_calibration`]).
+/// correction by samples per pulse and sampling phase ([`phase_calibration`]), through
+/// `chain` where there is one, less what the kernel adds for it.
 fn sampled_of_grid(
     all: &[(PulseRatios, Vec<(f64, f64)>)],
     pulses: &[(f64, f64)],
     damped: bool,
+    chain: Option<&EqualisedChain>,
 ) -> (Sampled64, Option<Phase64>) {
     let continuous: Vec<ContinuousPulse> = all
         .iter()
@@ -483,7 +493,10 @@ fn sampled_of_grid(
             duration_s,
         })
         .collect();
-    let phase = damped.then(|| phase_calibration(&continuous));
+    let phase = damped.then(|| {
+        let table = phase_calibration(&continuous, chain);
+        chain.map_or(table, |c| table.less_by_row(c.residual()))
+    });
     (sampled_calibration(&continuous), phase)
 }
 
@@ -518,7 +531,8 @@ fn class_grids<'a>(
 /// Flores at e 0.5, 0.58 at e 0.3) times the sample rate; `None` for a contact the kernel
 /// models exactly (no calibration).
 pub fn shortest_measured_samples(scene: &SceneFile) -> Result<Option<f64>, SimError> {
-    let Some(cal) = calibrate(scene)? else {
+    // The duration ratio alone is read: the chain does not change it.
+    let Some(cal) = calibrate(scene, None)? else {
         return Ok(None);
     };
     let plate = scene.plate.material();

@@ -9,10 +9,12 @@ use coalshock::{Material, ParticleClass, Scene, Settings};
 
 use crate::bridge::calibrate::{Calibration64, calibrate};
 use crate::bridge::convert::{
-    ConvertError, class_to_kernel, material_to_kernel, ratio_maps_to_kernel, sensor_to_kernel_in,
-    settings_to_kernel,
+    ConvertError, class_to_kernel, dynamics_to_kernel, material_to_kernel, ratio_maps_to_kernel,
+    sensor_to_kernel_in, settings_to_kernel,
 };
+use crate::bridge::equalised_fit::EqualisedChain;
 use crate::bridge::ratio_table::{RatioTable64, class_residual, class_table, needs_tables};
+use crate::bridge::sampled_phase::TABLE_PHASES;
 use crate::physics::integrate::SimError;
 use crate::scene::{SceneFile, SensorSpec};
 
@@ -40,7 +42,7 @@ impl SceneCalibration {
         } else {
             Vec::new()
         };
-        let contact = calibrate(scene)?;
+        let contact = calibrate(scene, equalised_chain(&scene.sensor).as_ref())?;
         let table_residual = if tables.is_empty() {
             None
         } else {
@@ -67,6 +69,14 @@ impl SceneCalibration {
             self.table_residual,
         )
     }
+}
+
+/// The chain of `sensor` as the kernel equalises it, for the phase table of a damped contact
+/// ([`EqualisedChain`] at [`TABLE_PHASES`]); `None` for a rigid chain, and for one the kernel
+/// refuses (the scene's build then names the stage).
+fn equalised_chain(sensor: &SensorSpec) -> Option<EqualisedChain> {
+    let dynamics = dynamics_to_kernel(sensor).ok()?;
+    EqualisedChain::new(sensor, &dynamics, TABLE_PHASES)
 }
 
 /// The kernel settings of a scene file: its `[settings]` with its calibration

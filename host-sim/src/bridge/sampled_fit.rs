@@ -36,15 +36,21 @@ pub fn sample_series(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<Vec<f
 /// (`0 <= phase < 1`): peak (N), duration (samples) and the neighbour asymmetry the detector
 /// reports (`coalshock::sampled_phase::neighbour_asymmetry`).
 pub fn fit_sampled_at(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<(f64, f64, f64)> {
-    let v = sample_series(series, dt, phase)?;
+    let [peak, samples, a] = fit_samples(&sample_series(series, dt, phase)?)?;
+    Some((peak, samples, a))
+}
+
+/// The kernel's fit of the samples `v` of one pulse, as the detector fits a calibrated
+/// (damped or yielding) contact's: `[peak, duration (samples), neighbour asymmetry]` from the
+/// largest sample, two either side of it and the sum; the peak in the unit of `v`.
+pub fn fit_samples(v: &[f64]) -> Option<[f64; 3]> {
     let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
     let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
     let top = five_about(&v32, i);
-    // A calibrated (damped or yielding) contact's pulses are read with three samples.
     let (peak, samples) = shape_fit::<Libm>(top, sum as f32, false)?;
     let a = neighbour_asymmetry(top[1], top[2], top[3]);
-    Some((peak as f64, samples as f64, a as f64))
+    Some([f64::from(peak), f64::from(samples), f64::from(a)])
 }
 
 /// Mean and standard deviation of `v` (0 and 0 when empty).

@@ -5,13 +5,16 @@
 //! kernel's bilinear reading, to the fits where the kernel reads them
 //! (`least_squares_as_read`), and each cell's spread is what the table leaves as the kernel
 //! reads it (`spread_as_read`): between its rows as well as on them, at the samples per
-//! pulse the kernel infers from the measured duration.
+//! pulse the kernel infers from the measured duration. Behind a chain that is not rigid the
+//! pulses are fitted as the detector sees them there, through the chain and the kernel's
+//! equaliser ([`EqualisedChain`]).
 
 use coalshock::sampled_phase::{
     PHASE_COLUMNS, PHASE_FIRST_N, PHASE_ROWS, PHASE_STEP, SampledPhase,
 };
 use coalshock::scene::MIN_DURATION_SAMPLES;
 
+use crate::bridge::equalised_fit::EqualisedChain;
 use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
 use crate::physics::integrate::lu::Lu;
 
@@ -47,6 +50,57 @@ impl Phase64 {
             sigma_ln_duration: f(&self.sigma_ln_duration),
         }
     }
+
+    /// The table less `by_n` (a correction by samples per pulse alone) read at each row's
+    /// `n_k`, so that `coalshock::SampledPhase::add_by_row` gives it back: its means taken off
+    /// the means, its spreads off the spreads in quadrature (a spread smaller than `by_n`'s
+    /// becomes 0, and the kernel's sum is then `by_n`'s: wider than this table's, never
+    /// narrower). A table calibrated behind a chain ([`phase_calibration`] with a chain)
+    /// holds the chain's residual already, and the kernel adds it again at build.
+    ///
+    /// ```
+    /// use coalshock::SampledCalibration;
+    /// use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS};
+    /// use host_sim::sampled_phase::Phase64;
+    /// let cells = |v: f64| [[v; PHASE_COLUMNS]; PHASE_ROWS];
+    /// let table = Phase64 {
+    ///     asymmetry: [[-0.4, 0.4]; PHASE_ROWS],
+    ///     ln_force: cells(-0.1),
+    ///     ln_duration: cells(0.2),
+    ///     sigma_ln_force: cells(0.05),
+    ///     sigma_ln_duration: cells(0.01),
+    /// };
+    /// let by_n = SampledCalibration {
+    ///     ln_force: [-0.03; 8],
+    ///     sigma_ln_force: [0.03; 8],
+    ///     sigma_ln_duration: [0.02; 8],
+    ///     ..SampledCalibration::NONE
+    /// };
+    /// let less = table.less_by_row(&by_n);
+    /// assert!((less.ln_force[4][1] + 0.07).abs() < 1e-6);
+    /// assert!((less.sigma_ln_force[4][1] - 0.04).abs() < 1e-6);
+    /// // The kernel's `add_by_row` gives the table back; a spread below `by_n`'s becomes its.
+    /// let mut kernel = less.to_kernel();
+    /// kernel.add_by_row(&by_n);
+    /// assert!((kernel.ln_force[9][7] + 0.1).abs() < 1e-6);
+    /// assert!((kernel.sigma_ln_force[0][0] - 0.05).abs() < 1e-6);
+    /// assert!((kernel.sigma_ln_duration[0][0] - 0.02).abs() < 1e-6);
+    /// ```
+    pub fn less_by_row(&self, by_n: &coalshock::SampledCalibration) -> Self {
+        let mut out = *self;
+        for k in 0..PHASE_ROWS {
+            let (lf, lt, sf, st) = by_n.at(row_samples(k).ln() as f32);
+            let less = |x: f64, d: f32| x - f64::from(d);
+            let quad = |x: f64, d: f32| (x * x - f64::from(d) * f64::from(d)).max(0.0).sqrt();
+            for c in 0..PHASE_COLUMNS {
+                out.ln_force[k][c] = less(self.ln_force[k][c], lf);
+                out.ln_duration[k][c] = less(self.ln_duration[k][c], lt);
+                out.sigma_ln_force[k][c] = quad(self.sigma_ln_force[k][c], sf);
+                out.sigma_ln_duration[k][c] = quad(self.sigma_ln_duration[k][c], st);
+            }
+        }
+        out
+    }
 }
 
 /// Samples per pulse of row `k`: `1.6 * 1.25^k`.
@@ -58,10 +112,12 @@ pub fn row_samples(k: usize) -> f64 {
 /// refitted so that they leave the least residual as the kernel reads them
 /// (`least_squares_as_read`), its spreads then taken as the kernel reads the table
 /// (`spread_as_read`). Each row's pulses are sampled and fitted once, at every offset of
-/// `BETWEEN_ROWS`.
-pub fn phase_calibration(pulses: &[ContinuousPulse]) -> Phase64 {
-    let rows = row_fits(pulses);
-    let check = check_fits(pulses);
+/// `BETWEEN_ROWS`, directly (`chain` `None`) or through `chain` and its equaliser; the table
+/// is then what the kernel reads behind that chain, its residual included
+/// ([`Phase64::less_by_row`] takes it off for the kernel to add).
+pub fn phase_calibration(pulses: &[ContinuousPulse], chain: Option<&EqualisedChain>) -> Phase64 {
+    let rows = row_fits(pulses, chain);
+    let check = check_fits(pulses, chain);
     let mut table = least_squares_as_read(&rows, &check, means_on_rows(&rows));
     spread_as_read(&rows, &mut table);
     table
@@ -71,7 +127,7 @@ pub fn phase_calibration(pulses: &[ContinuousPulse]) -> Phase64 {
 /// row's own samples per pulse (the offset 0 of `BETWEEN_ROWS`), though the kernel reads the
 /// table at the samples per pulse it infers from the measured duration.
 pub fn phase_calibration_on_rows(pulses: &[ContinuousPulse]) -> Phase64 {
-    let rows = row_fits(pulses);
+    let rows = row_fits(pulses, None);
     let mut table = means_on_rows(&rows);
     spread_as_read(&rows, &mut table);
     table
@@ -79,14 +135,14 @@ pub fn phase_calibration_on_rows(pulses: &[ContinuousPulse]) -> Phase64 {
 
 /// Each row's fits of `pulses` between the offsets of `BETWEEN_ROWS` and between the phases
 /// of `fits_at`, which `least_squares_as_read` holds out (`[row][offset]`).
-fn check_fits(pulses: &[ContinuousPulse]) -> Vec<Vec<Vec<Fit>>> {
+fn check_fits(pulses: &[ContinuousPulse], chain: Option<&EqualisedChain>) -> Vec<Vec<Vec<Fit>>> {
     (0..PHASE_ROWS)
         .map(|k| {
             BETWEEN_ROWS
                 .iter()
                 .map(|&s| {
                     let n = row_samples(k) * f64::from(PHASE_STEP).powf(s + 1.0 / 16.0);
-                    fits_at_phase(pulses, n, 0.21)
+                    fits_at_phase(pulses, n, 0.21, chain)
                 })
                 .collect()
         })
@@ -94,12 +150,15 @@ fn check_fits(pulses: &[ContinuousPulse]) -> Vec<Vec<Vec<Fit>>> {
 }
 
 /// Each row's fits of `pulses` at every offset of `BETWEEN_ROWS` (`[row][offset]`).
-fn row_fits(pulses: &[ContinuousPulse]) -> Vec<Vec<Vec<Fit>>> {
+fn row_fits(pulses: &[ContinuousPulse], chain: Option<&EqualisedChain>) -> Vec<Vec<Vec<Fit>>> {
     (0..PHASE_ROWS)
         .map(|k| {
             BETWEEN_ROWS
                 .iter()
-                .map(|&s| fits_at(pulses, row_samples(k) * f64::from(PHASE_STEP).powf(s)))
+                .map(|&s| {
+                    let n = row_samples(k) * f64::from(PHASE_STEP).powf(s);
+                    fits_at_phase(pulses, n, 0.5, chain)
+                })
                 .collect()
         })
         .collect()
@@ -117,26 +176,34 @@ struct Fit {
 }
 
 /// Each of `pulses` sampled at `n` samples per pulse and [`TABLE_PHASES`] phases,
-/// `(j + 1/2) / TABLE_PHASES`, and fitted as the kernel fits it.
-fn fits_at(pulses: &[ContinuousPulse], n: f64) -> Vec<Fit> {
-    fits_at_phase(pulses, n, 0.5)
-}
-
-/// [`fits_at`] at the phases `(j + offset) / TABLE_PHASES`.
-fn fits_at_phase(pulses: &[ContinuousPulse], n: f64, offset: f64) -> Vec<Fit> {
+/// `(j + offset) / TABLE_PHASES`, and fitted as the kernel fits it: directly, or through
+/// `chain` and its equaliser.
+fn fits_at_phase(
+    pulses: &[ContinuousPulse],
+    n: f64,
+    offset: f64,
+    chain: Option<&EqualisedChain>,
+) -> Vec<Fit> {
     let mut fits = Vec::new();
     for p in pulses {
         let dt = p.duration_s / n;
-        for j in 0..TABLE_PHASES {
-            let phase = (j as f64 + offset) / TABLE_PHASES as f64;
-            if let Some((peak, samples, a)) = fit_sampled_at(p.series, dt, phase) {
-                fits.push(Fit {
-                    samples,
-                    asymmetry: a,
-                    ln_force: (peak / p.peak_n).ln(),
-                    ln_duration: (samples * dt / p.duration_s).ln(),
-                });
-            }
+        let phase_fits = match chain {
+            Some(c) => c.fits(p, n, offset),
+            None => (0..TABLE_PHASES)
+                .map(|j| {
+                    let phase = (j as f64 + offset) / TABLE_PHASES as f64;
+                    let (peak, samples, a) = fit_sampled_at(p.series, dt, phase)?;
+                    Some([peak / p.peak_n, samples, a])
+                })
+                .collect(),
+        };
+        for [force_ratio, samples, asymmetry] in phase_fits.into_iter().flatten() {
+            fits.push(Fit {
+                samples,
+                asymmetry,
+                ln_force: force_ratio.ln(),
+                ln_duration: (samples / n).ln(),
+            });
         }
     }
     fits

@@ -28,7 +28,7 @@ use crate::bridge::kernel_scene::{SceneCalibration, scene_to_kernel};
 use crate::scene::{SceneFile, SensorSpec};
 
 /// `host-sim export`: reads the scene file `scene_path`, writes the source to `out` (standard
-/// output when `None`).
+/// output when `None`), creating its directory where missing (as `stream --out` does).
 pub fn run(scene_path: &Path, out: Option<&Path>) -> Result<()> {
     let scene = crate::scene::load(scene_path)?;
     // The path as given when relative (the project's own `scenes/...`), else its file name:
@@ -44,6 +44,10 @@ pub fn run(scene_path: &Path, out: Option<&Path>) -> Result<()> {
         .with_context(|| format!("exporting the scene {}", scene_path.display()))?;
     match out {
         Some(out) => {
+            if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir)
+                    .with_context(|| format!("creating {}", dir.display()))?;
+            }
             std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?
         }
         None => print!("{text}"),
