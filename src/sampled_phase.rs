@@ -93,60 +93,6 @@ impl SampledPhase {
         ))
     }
 
-    /// Adds `by_n` (a correction by samples per pulse alone, such as the equaliser's residual,
-    /// [`crate::chain_residual`]) read at each row's `n_k` to every cell of the row: its means
-    /// to the means (held within `|ln| <= 2`), its spreads in quadrature to the spreads (at
-    /// most 2). [`SampledPhase::NONE`] stays.
-    ///
-    /// ```
-    /// use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS, SampledPhase};
-    /// use coalshock::SampledCalibration;
-    /// let mut table = SampledPhase {
-    ///     asymmetry: [[-0.5, 0.5]; PHASE_ROWS],
-    ///     sigma_ln_force: [[0.03; PHASE_COLUMNS]; PHASE_ROWS],
-    ///     ..SampledPhase::NONE
-    /// };
-    /// // -0.05 in ln F and 0.04 of spread at every n.
-    /// let by_n = SampledCalibration {
-    ///     ln_force: [-0.05; 8],
-    ///     sigma_ln_force: [0.04; 8],
-    ///     ..SampledCalibration::NONE
-    /// };
-    /// table.add_by_row(&by_n);
-    /// assert!((table.ln_force[3][2] + 0.05).abs() < 1e-6);
-    /// assert!((table.sigma_ln_force[9][7] - 0.05).abs() < 1e-6);
-    /// let mut none = SampledPhase::NONE;
-    /// none.add_by_row(&by_n);
-    /// assert_eq!(none, SampledPhase::NONE);
-    /// ```
-    pub fn add_by_row(&mut self, by_n: &crate::SampledCalibration) {
-        if *self == Self::NONE {
-            return;
-        }
-        // `by_n` at each row's `n_k = PHASE_FIRST_N * PHASE_STEP^k`.
-        let mut n = PHASE_FIRST_N;
-        let by_row: [(f32, f32, f32, f32); PHASE_ROWS] = core::array::from_fn(|_| {
-            let at = by_n.at(libm::logf(n));
-            n *= PHASE_STEP;
-            at
-        });
-        let rows = self
-            .ln_force
-            .iter_mut()
-            .zip(&mut self.ln_duration)
-            .zip(&mut self.sigma_ln_force)
-            .zip(&mut self.sigma_ln_duration)
-            .zip(&by_row);
-        let add = |x: &mut f32, d: f32| *x = (*x + d).clamp(-2.0, 2.0);
-        let quad = |x: &mut f32, d: f32| *x = libm::sqrtf(*x * *x + d * d).min(2.0);
-        for ((((f, t), s_f), s_t), &(lf, lt, sf, st)) in rows {
-            f.iter_mut().for_each(|x| add(x, lf));
-            t.iter_mut().for_each(|x| add(x, lt));
-            s_f.iter_mut().for_each(|x| quad(x, sf));
-            s_t.iter_mut().for_each(|x| quad(x, st));
-        }
-    }
-
     /// `Err` unless every axis lies within `-1..=1` in order, every mean within `|ln| <= 2`
     /// and every spread within `0..=2`.
     pub fn check(&self) -> Result<(), Error> {

@@ -218,7 +218,9 @@ pub struct Settings {
     pub flat_top_ratio: f32,
     /// A damped contact's sampling correction by samples per pulse and sampling phase, which
     /// takes the place of `contact.sampled` where it reaches ([`SampledPhase::NONE`]: no
-    /// table). With the `sampled_phase` feature only.
+    /// table). Behind a chain that is not rigid it is of the pulses as the detector sees them
+    /// there, equalised (host-sim fits it through the chain and this kernel's equaliser), and
+    /// the scene adds nothing to it. With the `sampled_phase` feature only.
     #[cfg(feature = "sampled_phase")]
     pub sampled_phase: SampledPhase,
 }
@@ -400,8 +402,8 @@ pub struct Scene<const N: usize = DEFAULT_CLASSES, M: Backend = DefaultBackend> 
 impl<const N: usize, M: Backend> Scene<N, M> {
     /// Builds a scene and precomputes every class's envelope and the separability, and behind a
     /// chain that is not rigid the bias its equaliser leaves in short pulses
-    /// ([`crate::chain_residual`], folded into `settings.contact.sampled` and the rows of
-    /// `settings.sampled_phase`).
+    /// ([`crate::chain_residual`], folded into `settings.contact.sampled`; a
+    /// `settings.sampled_phase` table is already of the equalised pulses).
     ///
     /// Refuses, with a typed [`Error`]: invalid materials, ranges or sensor settings; fewer than
     /// two classes or more than `N`; any corner of any envelope whose peak force or duration
@@ -557,9 +559,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         &self.chain_bias
     }
 
-    /// The settings as given, but for `contact.sampled` and `sampled_phase` behind a chain that
-    /// is not rigid: the bias the equaliser leaves in short pulses ([`crate::chain_residual`])
-    /// is added to them ([`SampledCalibration::combined`], [`SampledPhase::add_by_row`]).
+    /// The settings as given, but for `contact.sampled` behind a chain that is not rigid: the
+    /// bias the equaliser leaves in short pulses ([`crate::chain_residual`]) is added to it
+    /// ([`SampledCalibration::combined`]).
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
@@ -937,13 +939,11 @@ impl<M: Backend> Scene<DEFAULT_CLASSES, M> {
 }
 
 /// Adds the bias the equaliser of `sensor` leaves in short pulses
-/// ([`crate::chain_residual`]) to the settings' sampling correction, and to the rows of its
-/// phase table where it has one (the table, where it reads, takes the correction's place).
-/// Not inlined: a rigid scene's build never calls it and must not carry its frame.
+/// ([`crate::chain_residual`]) to the settings' sampling correction. A phase table is left as
+/// it is: it is calibrated on the equalised pulses. Not inlined: a rigid scene's build never
+/// calls it and must not carry its frame.
 #[inline(never)]
 fn add_residual(settings: &mut Settings, sensor: &SensorChain) {
     let r = sensor.dynamics.residual_at(sensor.sample_rate_hz);
     settings.contact.sampled = settings.contact.sampled.combined(&r);
-    #[cfg(feature = "sampled_phase")]
-    settings.sampled_phase.add_by_row(&r);
 }

@@ -135,8 +135,8 @@ pub struct Calibration64 {
     pub sampled: Option<Sampled64>,
     /// The damped contact's correction by samples per pulse and sampling phase
     /// ([`phase_calibration`]), with `sampled`; `None` for a contact of the Hertz law (a
-    /// yielding one). Behind a chain that is not rigid, fitted through it and less the
-    /// residual the kernel adds for it at build ([`Phase64::less_by_row`]).
+    /// yielding one). Behind a chain that is not rigid, fitted through it and the kernel's
+    /// equaliser ([`EqualisedChain`]).
     pub phase: Option<Phase64>,
     /// Mean skewness of the impacts' whole pulses (above 0.5 % of the peak; 0 for Hertz).
     pub skewness: f64,
@@ -352,9 +352,7 @@ fn pulse_ratios_and_series(spec: &ImpactSpec) -> Result<Pulse64, SimError> {
 /// yielding class (the kernel's own model: every ratio is 1). Integrates each class, with its
 /// own law ([`SceneFile::class_law`]), at radius {min, geometric centre, max} x speed {min,
 /// centre, max}. A damped contact's phase table is fitted through `chain`, the scene's chain
-/// and the kernel's equaliser, when it is not rigid (`None`: as sampled on a rigid beam), and
-/// then holds that chain's residual less the one the kernel adds at build
-/// ([`Phase64::less_by_row`]).
+/// and the kernel's equaliser, when it is not rigid (`None`: as sampled on a rigid beam).
 pub fn calibrate(
     scene: &SceneFile,
     chain: Option<&EqualisedChain>,
@@ -477,7 +475,7 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
 /// [`sampled_calibration`] of the grid's pulses: their series (`all`) with their peak force
 /// (N) and duration from the area (s) (`pulses`); for a damped contact (`damped`) also the
 /// correction by samples per pulse and sampling phase ([`phase_calibration`]), through
-/// `chain` where there is one, less what the kernel adds for it.
+/// `chain` where there is one.
 fn sampled_of_grid(
     all: &[(PulseRatios, Vec<(f64, f64)>)],
     pulses: &[(f64, f64)],
@@ -493,10 +491,7 @@ fn sampled_of_grid(
             duration_s,
         })
         .collect();
-    let phase = damped.then(|| {
-        let table = phase_calibration(&continuous, chain);
-        chain.map_or(table, |c| table.less_by_row(c.residual()))
-    });
+    let phase = damped.then(|| phase_calibration(&continuous, chain));
     (sampled_calibration(&continuous), phase)
 }
 

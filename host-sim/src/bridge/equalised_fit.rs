@@ -6,8 +6,10 @@
 //! gives the force back only within the sampled band (its accelerometer inverse is
 //! regularised there), so at a few samples per pulse it reshapes the pulse, and how depends on
 //! the pulse's spectrum. The kernel's own residual (`coalshock::chain_residual`) is the Hertz
-//! pulse's; a damped pulse is shorter and skewed, and through the MEMS band at 3-12 samples
-//! per pulse its fit moves otherwise.
+//! pulse's, and is added to the correction by samples per pulse alone; a damped pulse is
+//! shorter and skewed, and through the MEMS band at 3-12 samples per pulse its fit moves
+//! otherwise. The phase table so calibrated holds the equaliser's residual itself, and the
+//! kernel adds nothing to it.
 //!
 //! At `n` samples per pulse a pulse of duration `t` (from its area) is stretched in time by
 //! `n / (f_s t)`, so that it lasts `n` samples of the chain's rate `f_s`; every ratio the
@@ -19,10 +21,9 @@
 //! counts at a peak of [`PEAK_COUNTS`], go through a fresh `coalshock::Equaliser` and are
 //! fitted as the detector fits them (`crate::bridge::sampled_fit::fit_samples`).
 
-use coalshock::chain_residual;
+use coalshock::Equaliser;
 use coalshock::equaliser::{ChainDynamics, EqualiserDesign};
 use coalshock::math::DefaultBackend;
-use coalshock::{Equaliser, SampledCalibration};
 
 use crate::bridge::sampled_fit::{ContinuousPulse, fit_samples, force_at};
 use crate::scene::SensorSpec;
@@ -41,14 +42,13 @@ const FINE_OVERSAMPLE: u32 = 2;
 const TAIL_SAMPLES: usize = 4;
 
 /// A non-rigid chain as the kernel equalises it: host-sim's exact chain sampled
-/// [`EqualisedChain::phases`] times per sample, the kernel's equaliser design at the chain's
-/// rate, and the residual the kernel adds for it at build (`coalshock::chain_residual`).
+/// [`EqualisedChain::phases`] times per sample, and the kernel's equaliser design at the
+/// chain's rate.
 pub struct EqualisedChain {
     fine: Sensor,
     design: EqualiserDesign,
     sample_rate_hz: f64,
     phases: usize,
-    residual: SampledCalibration,
 }
 
 impl EqualisedChain {
@@ -70,13 +70,11 @@ impl EqualisedChain {
             ..spec.clone()
         };
         let fine = Sensor::new(&fine_spec).ok()?;
-        let residual = chain_residual::residual(dynamics, &design, fs as f32);
         Some(Self {
             fine,
             design,
             sample_rate_hz: fs,
             phases,
-            residual,
         })
     }
 
@@ -85,10 +83,9 @@ impl EqualisedChain {
         self.phases
     }
 
-    /// What the kernel adds to the sampling corrections for this chain at build, by samples
-    /// per pulse (`coalshock::chain_residual::residual`).
-    pub fn residual(&self) -> &SampledCalibration {
-        &self.residual
+    /// The kernel's equaliser design for the chain.
+    pub fn design(&self) -> &EqualiserDesign {
+        &self.design
     }
 
     /// `pulse` stretched to `n` samples per pulse, through the chain and the equaliser, fitted

@@ -50,57 +50,6 @@ impl Phase64 {
             sigma_ln_duration: f(&self.sigma_ln_duration),
         }
     }
-
-    /// The table less `by_n` (a correction by samples per pulse alone) read at each row's
-    /// `n_k`, so that `coalshock::SampledPhase::add_by_row` gives it back: its means taken off
-    /// the means, its spreads off the spreads in quadrature (a spread smaller than `by_n`'s
-    /// becomes 0, and the kernel's sum is then `by_n`'s: wider than this table's, never
-    /// narrower). A table calibrated behind a chain ([`phase_calibration`] with a chain)
-    /// holds the chain's residual already, and the kernel adds it again at build.
-    ///
-    /// ```
-    /// use coalshock::SampledCalibration;
-    /// use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS};
-    /// use host_sim::sampled_phase::Phase64;
-    /// let cells = |v: f64| [[v; PHASE_COLUMNS]; PHASE_ROWS];
-    /// let table = Phase64 {
-    ///     asymmetry: [[-0.4, 0.4]; PHASE_ROWS],
-    ///     ln_force: cells(-0.1),
-    ///     ln_duration: cells(0.2),
-    ///     sigma_ln_force: cells(0.05),
-    ///     sigma_ln_duration: cells(0.01),
-    /// };
-    /// let by_n = SampledCalibration {
-    ///     ln_force: [-0.03; 8],
-    ///     sigma_ln_force: [0.03; 8],
-    ///     sigma_ln_duration: [0.02; 8],
-    ///     ..SampledCalibration::NONE
-    /// };
-    /// let less = table.less_by_row(&by_n);
-    /// assert!((less.ln_force[4][1] + 0.07).abs() < 1e-6);
-    /// assert!((less.sigma_ln_force[4][1] - 0.04).abs() < 1e-6);
-    /// // The kernel's `add_by_row` gives the table back; a spread below `by_n`'s becomes its.
-    /// let mut kernel = less.to_kernel();
-    /// kernel.add_by_row(&by_n);
-    /// assert!((kernel.ln_force[9][7] + 0.1).abs() < 1e-6);
-    /// assert!((kernel.sigma_ln_force[0][0] - 0.05).abs() < 1e-6);
-    /// assert!((kernel.sigma_ln_duration[0][0] - 0.02).abs() < 1e-6);
-    /// ```
-    pub fn less_by_row(&self, by_n: &coalshock::SampledCalibration) -> Self {
-        let mut out = *self;
-        for k in 0..PHASE_ROWS {
-            let (lf, lt, sf, st) = by_n.at(row_samples(k).ln() as f32);
-            let less = |x: f64, d: f32| x - f64::from(d);
-            let quad = |x: f64, d: f32| (x * x - f64::from(d) * f64::from(d)).max(0.0).sqrt();
-            for c in 0..PHASE_COLUMNS {
-                out.ln_force[k][c] = less(self.ln_force[k][c], lf);
-                out.ln_duration[k][c] = less(self.ln_duration[k][c], lt);
-                out.sigma_ln_force[k][c] = quad(self.sigma_ln_force[k][c], sf);
-                out.sigma_ln_duration[k][c] = quad(self.sigma_ln_duration[k][c], st);
-            }
-        }
-        out
-    }
 }
 
 /// Samples per pulse of row `k`: `1.6 * 1.25^k`.
@@ -112,9 +61,9 @@ pub fn row_samples(k: usize) -> f64 {
 /// refitted so that they leave the least residual as the kernel reads them
 /// (`least_squares_as_read`), its spreads then taken as the kernel reads the table
 /// (`spread_as_read`). Each row's pulses are sampled and fitted once, at every offset of
-/// `BETWEEN_ROWS`, directly (`chain` `None`) or through `chain` and its equaliser; the table
-/// is then what the kernel reads behind that chain, its residual included
-/// ([`Phase64::less_by_row`] takes it off for the kernel to add).
+/// `BETWEEN_ROWS`, directly (`chain` `None`) or through `chain` and its equaliser: the table
+/// is then what the kernel reads behind that chain, the equaliser's residual included (the
+/// kernel adds nothing to it).
 pub fn phase_calibration(pulses: &[ContinuousPulse], chain: Option<&EqualisedChain>) -> Phase64 {
     let rows = row_fits(pulses, chain);
     let check = check_fits(pulses, chain);
