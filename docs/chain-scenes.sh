@@ -1,5 +1,6 @@
-# Shell functions that docs/chain-tables.sh and docs/noise-table.sh source (not run on its own):
-# a chain scene with its [sensor] table told how well the chain is known.
+# Shell functions that docs/chain-tables.sh, docs/noise-table.sh and docs/damped-chain-table.sh
+# source (not run on its own): a chain scene with its [sensor] table told how well the chain is
+# known.
 
 # The `[sensor]` line of a chain known exactly.
 EXACT_TOLERANCE='chain_tolerance = { frequency = 0.0, damping = 0.0, gain = 0.0 }'
