@@ -135,12 +135,12 @@ fn fits_at_phase(
 ) -> Vec<Fit> {
     let mut fits = Vec::new();
     for p in pulses {
-        let dt = p.duration_s / n;
         let phase_fits = match chain {
             Some(c) => c.fits(p, n, offset),
             None => (0..TABLE_PHASES)
                 .map(|j| {
                     let phase = (j as f64 + offset) / TABLE_PHASES as f64;
+                    let dt = p.duration_s / n;
                     let (peak, samples, a) = fit_sampled_at(p.series, dt, phase)?;
                     Some([peak / p.peak_n, samples, a])
                 })
