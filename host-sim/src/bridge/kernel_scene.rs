@@ -16,6 +16,7 @@ use crate::bridge::equalised_fit::EqualisedChain;
 use crate::bridge::ratio_table::{RatioTable64, class_residual, class_table, needs_tables};
 use crate::bridge::sampled_phase::TABLE_PHASES;
 use crate::physics::integrate::SimError;
+use crate::physics::law_spec::LawSpec;
 use crate::scene::{SceneFile, SensorSpec};
 
 /// What a scene's kernel takes from the integrator (f64): the contact calibration, and the
@@ -42,7 +43,11 @@ impl SceneCalibration {
         } else {
             Vec::new()
         };
-        let contact = calibrate(scene, equalised_chain(&scene.sensor).as_ref())?;
+        // Only a damped contact's phase table is fitted through the chain.
+        let chain = (scene.contact != LawSpec::Hertz)
+            .then(|| equalised_chain(&scene.sensor))
+            .flatten();
+        let contact = calibrate(scene, chain.as_ref())?;
         let table_residual = if tables.is_empty() {
             None
         } else {
