@@ -137,7 +137,7 @@ impl IdentifyArgs {
         let Some(e) = self.restitution else {
             anyhow::bail!("--pulse-law {name}: give its --restitution too");
         };
-        if !(e > 0.0 && e <= 1.0) {
+        if !host_sim::laws::restitution_in_range(e, false) {
             anyhow::bail!("--restitution must be in (0, 1] (got {e})");
         }
         Ok(LawSpec::restitution_law(name, e))

@@ -55,6 +55,7 @@ use coalshock::Settings;
 
 use crate::physics::hertz64::Material64;
 use crate::physics::law_spec::LawSpec;
+use crate::physics::laws::restitution_in_range;
 use crate::physics::sim_error::SimError;
 
 /// Longest class name in bytes (the kernel's `coalshock::scene::NAME_LEN`).
@@ -577,8 +578,7 @@ pub fn drop_speed_m_s(height_m: f64) -> f64 {
 /// Checks the parameters of the scene's `[contact]` law, naming the field (`contact.d_m`).
 fn validate_contact(law: &LawSpec) -> Result<(), SceneError> {
     let e_in = |e: f64, hi_open: bool| {
-        let ok = e.is_finite() && e > 0.0 && if hi_open { e < 1.0 } else { e <= 1.0 };
-        if ok {
+        if restitution_in_range(e, hi_open) {
             Ok(())
         } else {
             Err(SceneError::invalid(

@@ -548,8 +548,22 @@ fn mul_bounds(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
     (lo, hi)
 }
 
+/// `true` when `e` is a target restitution the restitution laws take: finite, in `(0, 1]`,
+/// or in `(0, 1)` when `open_at_one` (Adams' restitution form).
+///
+/// ```
+/// use host_sim::laws::restitution_in_range;
+/// assert!(restitution_in_range(1.0, false));
+/// assert!(!restitution_in_range(1.0, true));
+/// assert!(!restitution_in_range(0.0, false));
+/// assert!(!restitution_in_range(f64::NAN, false));
+/// ```
+pub fn restitution_in_range(e: f64, open_at_one: bool) -> bool {
+    e.is_finite() && e > 0.0 && if open_at_one { e < 1.0 } else { e <= 1.0 }
+}
+
 fn check_restitution(e: f64) -> Result<(), SimError> {
-    if e > 0.0 && e <= 1.0 {
+    if restitution_in_range(e, false) {
         Ok(())
     } else {
         Err(SimError::InvalidParameter {
