@@ -73,9 +73,10 @@
 //!    --restitution E`, with `--accelerometer`): when the contact is undamped Hertz or a
 //!    restitution-parametrised law, a pulse's force is `F_max h((t - t_0) / t_c)` with `h`
 //!    known and the same for every impact ([`crate::sim::pulse_response`]), so the band need
-//!    not ring to be seen: it shapes the pulse. Every pulse with free windows on both sides and no sample on a rail (two or more
-//!    samples at the stream's lowest or highest code) is taken from 4 samples before its
-//!    first flag to the free window after it, the ring before it removed (as in step 3), and
+//!    not ring to be seen: it shapes the pulse. Every pulse with free windows on both sides
+//!    and no sample on a rail (two or more samples at the stream's lowest or highest code) is
+//!    taken from 4 samples before its first flag to the free window after it, the ring before
+//!    it removed (as in step 3), and
 //!    fitted by that pulse through the chain: the modes just identified (frequency, damping,
 //!    gain) and a band `(f_a, zeta_a)` shared by all pulses, discretised as the sensor does
 //!    (first-order hold, 32 steps per sample). `(F_max, t_0, t_c)` are profiled out pulse by
