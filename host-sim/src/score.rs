@@ -10,6 +10,7 @@ pub mod cusum;
 pub mod evaluate;
 pub mod mismatch;
 pub mod noise_check;
+pub mod peak_snr;
 pub mod reference;
 pub mod reliability;
 pub mod replay;

@@ -103,6 +103,7 @@ pub use crate::score::bayes::class_models;
 use crate::score::bayes::{Accuracy, ClassModel, FeatureNoise, bayes_accuracy, decide};
 use crate::score::mismatch::{ChainMismatch, drawn_chain};
 use crate::score::noise_check::StatedNoiseCheck;
+use crate::score::peak_snr::{PeakRow, PeakSnrTable};
 use crate::score::reference::{ReferenceLimit, ReferenceOptions, reference_limit};
 use crate::score::reliability::{Reliability, reliability};
 use crate::score::replay::{match_truth, replay_events};
@@ -407,6 +408,9 @@ pub struct Evaluation {
     pub measured_vs_oracle: Paired,
     /// Noise and bias of the measured features.
     pub noise: NoiseEstimate,
+    /// Verdicts and feature errors by the impact's peak over the force noise the detector
+    /// sees ([`crate::score::peak_snr`]).
+    pub by_peak_over_noise: PeakSnrTable,
     /// White-noise gain of the kernel's equaliser (1 for a rigid chain): the ADC noise RMS
     /// times it is the noise of the reconstructed force, in counts.
     pub equaliser_noise_gain: f64,
@@ -903,6 +907,12 @@ fn assemble<M: Backend>(
             std_error: forced_choice_std_error.hypot(reference.std_error),
         },
         reference,
+        by_peak_over_noise: by_peak_over_noise(
+            scene,
+            &replayed.outcomes,
+            limits.equaliser_noise_gain,
+            k,
+        ),
         reliability: reliability(replayed.outcomes.iter().filter_map(|o| {
             let w = priors[o.class] / opts.n_per_class as f64;
             o.posterior.map(|p| (p, o.forced == Some(o.class), w))
@@ -1109,6 +1119,31 @@ fn outcome_of(
     o
 }
 
+/// The table by peak over noise ([`crate::score::peak_snr`]): the force noise the detector
+/// sees is the ADC's noise RMS through the equaliser, `noise_rms_counts * gain *
+/// effective_mass_kg / counts_per_m_s2` (N).
+fn by_peak_over_noise(
+    scene: &SceneFile,
+    outcomes: &[Outcome],
+    equaliser_noise_gain: f64,
+    k: usize,
+) -> PeakSnrTable {
+    let s = &scene.sensor;
+    let noise_force_n =
+        s.noise_rms_counts * equaliser_noise_gain * s.effective_mass_kg / s.counts_per_m_s2;
+    PeakSnrTable::of(
+        noise_force_n,
+        outcomes.iter().map(|o| PeakRow {
+            peak_over_noise: o.true_ln.0.exp() / noise_force_n,
+            detected: o.column != k + 3,
+            confident: (o.column < k).then_some(o.column == o.class),
+            error_ln: o
+                .measured
+                .map(|m| (m.ln_force - o.hertz_ln.0, m.ln_duration - o.hertz_ln.1)),
+        }),
+    )
+}
+
 /// Impact `t`'s measurement `m` located in its true class's `(ln R, ln u)`
 /// (`coalshock::Scene::located`), its errors over the sigmas the classifier weighed it on.
 fn located_z<const N: usize, M: Backend>(
@@ -1186,6 +1221,7 @@ impl Evaluation {
         self.confusion_text(&mut s);
         self.kernel_text(&mut s);
         self.feature_error_text(&mut s);
+        s += &self.by_peak_over_noise.text();
         s += &self.reference_table();
         self.diagnostics_text(&mut s);
         self.paired_loss_text(&mut s);
