@@ -79,6 +79,8 @@ cut -f1 "$work/list.tsv" | xargs -P "$jobs" -I{} sh -c \
 
 python3 - "$work" "$n" "$seed" > docs/grid.md <<'EOF'
 import json, os, sys
+sys.path.insert(0, "docs")
+from targets import check  # noqa: E402
 work, n, seed = sys.argv[1], sys.argv[2], sys.argv[3]
 rows, misses = [], {"forced choice": [], "confident errors": [], "calibration": [], "failed": []}
 refused = []
@@ -98,19 +100,8 @@ for line in open(os.path.join(work, "list.tsv")):
         misses["failed"].append(name)
         rows.append("| %s | %s | %s | %s | %s | failed | | | | | | |" % (law, e, rate, noise, priors))
         continue
-    gap, se = d["kernel_vs_reference"]["difference"], d["kernel_vs_reference"]["std_error"]
+    fails, gap, se, worst_bin = check(d)
     rel = d["reliability"]
-    worst_bin = 0.0
-    for b in rel["bins"]:
-        if b["verdicts"] >= rel["min_verdicts"]:
-            worst_bin = max(worst_bin, abs(b["stated"] - b["observed"]) - 2 * b["std_error"])
-    fails = []
-    if gap + 2 * se < -0.01:
-        fails.append("forced choice")
-    if d["confident_error_rate"] > 0.01:
-        fails.append("confident errors")
-    if worst_bin > 0.02:
-        fails.append("calibration")
     for f in fails:
         misses[f].append(name)
     rows.append("| %s | %s | %s | %s | %s | %.2f | %.2f | %+.2f ± %.2f | %.1f | %.2f | %.1f | %s |" % (

@@ -102,6 +102,8 @@ cut -f1 "$work/list.tsv" | xargs -P "$jobs" -I{} sh -c \
 
 python3 - "$work" "$n" "$seed" "$count" "$scene_seed" > docs/random.md <<'EOF'
 import json, os, re, sys
+sys.path.insert(0, "docs")
+from targets import check  # noqa: E402
 work, n, seed, count, scene_seed = sys.argv[1:6]
 rows, misses, causes, refused, failed = [], {"forced choice": [], "confident errors": [], "calibration": []}, {}, [], []
 for line in open(os.path.join(work, "list.tsv")):
@@ -124,19 +126,8 @@ for line in open(os.path.join(work, "list.tsv")):
     bins = d["by_peak_over_noise"]["bins"]
     impacts = sum(b["impacts"] for b in bins)
     faint = sum(b["impacts"] for b in bins if b["to"] is not None and b["to"] <= 10.0) / max(impacts, 1)
-    gap, se = d["kernel_vs_reference"]["difference"], d["kernel_vs_reference"]["std_error"]
+    fails, gap, se, worst_bin = check(d)
     rel = d["reliability"]
-    worst_bin = 0.0
-    for b in rel["bins"]:
-        if b["verdicts"] >= rel["min_verdicts"]:
-            worst_bin = max(worst_bin, abs(b["stated"] - b["observed"]) - 2 * b["std_error"])
-    fails = []
-    if gap + 2 * se < -0.01:
-        fails.append("forced choice")
-    if d["confident_error_rate"] > 0.01:
-        fails.append("confident errors")
-    if worst_bin > 0.02:
-        fails.append("calibration")
     cause = [c for c, hit in (("clips", clip > 1.0), ("faint", faint > 0.05)) if hit]
     for f in fails:
         misses[f].append(name)

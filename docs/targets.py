@@ -1,0 +1,29 @@
+"""The targets of docs/grid.md, checked on one `host-sim evaluate --json` object.
+
+docs/grid-table.sh and docs/random-table.sh import it (run from the repository root with
+docs/ on the path). A row misses a target when:
+  forced choice     the kernel is more than 1 pp below the reference limit beyond two standard
+                    errors of the difference;
+  confident errors  more than 1 % of its Class verdicts are wrong;
+  calibration       a reliability bin of at least `min_verdicts` verdicts has
+                    |stated - observed| above 2 pp beyond two of the bin's standard errors.
+"""
+
+
+def check(d):
+    """(the targets missed, kernel - reference, its standard error, the worst bin's excess)."""
+    gap = d["kernel_vs_reference"]["difference"]
+    se = d["kernel_vs_reference"]["std_error"]
+    rel = d["reliability"]
+    worst_bin = 0.0
+    for b in rel["bins"]:
+        if b["verdicts"] >= rel["min_verdicts"]:
+            worst_bin = max(worst_bin, abs(b["stated"] - b["observed"]) - 2 * b["std_error"])
+    fails = []
+    if gap + 2 * se < -0.01:
+        fails.append("forced choice")
+    if d["confident_error_rate"] > 0.01:
+        fails.append("confident errors")
+    if worst_bin > 0.02:
+        fails.append("calibration")
+    return fails, gap, se, worst_bin
