@@ -121,6 +121,7 @@ fn bench(c: &mut Criterion) {
         sigma_ln_duration: 0.005,
         cov_ln: -4e-6,
         asymmetry: 0.0,
+        trigger_margin: f32::INFINITY,
     };
     c.bench_function(&format!("{backend}/classify one measurement"), |b| {
         b.iter(|| black_box(scene.classify(black_box(&meas))))

@@ -26,7 +26,22 @@ pub struct Measurement {
     /// ([`crate::sampled_phase::neighbour_asymmetry`], `-1..=1`; 0 when the pulse was not
     /// read with three samples): the sampling phase, for [`crate::SampledPhase`].
     pub asymmetry: f32,
+    /// How far the measured peak lies above the level that started the pulse, in standard
+    /// deviations of the peak's noise: `(F_max - F_trigger) / sigma_F` (dimensionless;
+    /// `f32::INFINITY` for a pulse not found by a trigger, or measured from its clipped
+    /// flanks, far above it). Below [`TRIGGER_MARGIN`] the pulse may have been found only
+    /// because the noise lifted it over the trigger, and that noise is in its measurement:
+    /// such a pulse gets no `Class` verdict (see [`Scene::classify`]).
+    pub trigger_margin: f32,
 }
+
+/// The least [`Measurement::trigger_margin`] of a `Class` verdict: 3 standard deviations. A
+/// pulse whose true peak lies below the trigger is measured that far above it with
+/// probability at most `1 - Phi(3) = 0.13 %`; closer to the trigger, the pulses the noise
+/// lifted over it are found and the ones it pushed down are not, so the measured peak is
+/// biased up and the duration, the area over the peak, down (`evaluate`'s table by peak over
+/// noise shows it).
+pub const TRIGGER_MARGIN: f32 = 3.0;
 
 /// Why a pulse got no class at all.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -224,8 +239,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// it is `OutOfEnvelope` (with the nearest class); otherwise the posterior of class `c` is
     /// `prior_c L_c / sum_j prior_j L_j` with `L` from [`crate::envelope::Envelope::ln_likelihood`],
     /// and the best class is reported as `Class` when its posterior reaches
-    /// `1 - confident_error_rate`, else `Ambiguous`. Never panics: a non-finite or non-positive measurement is
-    /// `Rejected(Implausible)`.
+    /// `1 - confident_error_rate` and the pulse lies [`TRIGGER_MARGIN`] standard deviations
+    /// above its trigger ([`Measurement::trigger_margin`]), else `Ambiguous`. Never panics: a
+    /// non-finite or non-positive measurement is `Rejected(Implausible)`.
     pub fn classify(&self, m: &Measurement) -> Verdict {
         self.classify_with_likelihoods(m).0
     }
@@ -240,7 +256,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let scene: Scene = Scene::paper().unwrap();
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
-    ///                       cov_ln: -1e-4, asymmetry: 0.0 };
+    ///                       cov_ln: -1e-4, asymmetry: 0.0,
+    ///                   trigger_margin: f32::INFINITY };
     /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
@@ -277,7 +294,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let top = lls.iter().take(n).fold(f32::NEG_INFINITY, |a, &b| a.max(b));
         let sum: f32 = lls.iter().take(n).map(|&ll| M::exp(ll - top)).sum();
         let posterior = M::exp(best_wide - top) / sum;
-        let verdict = if posterior >= s.confidence_threshold() {
+        let verdict = if posterior >= s.confidence_threshold() && m.trigger_margin >= TRIGGER_MARGIN
+        {
             Verdict::Class {
                 class: w.best,
                 posterior,
@@ -386,7 +404,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let scene: Scene = Scene::paper().unwrap();
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
-    ///                       cov_ln: -1e-4, asymmetry: 0.0 };
+    ///                       cov_ln: -1e-4, asymmetry: 0.0,
+    ///                   trigger_margin: f32::INFINITY };
     /// let (x, y, noise) = scene.located(0, &m).unwrap();
     /// let inv = scene.invert(0, &m).unwrap();
     /// assert!((x.exp() / inv.radius_m - 1.0).abs() < 1e-5);
@@ -487,6 +506,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             // The calibration's spread of the peak comes back opposite in the duration too.
             cov_ln: cov - sf * sf,
             asymmetry: m.asymmetry,
+            trigger_margin: m.trigger_margin,
         }
     }
 }

@@ -1095,6 +1095,7 @@ impl<M: Backend> Detector<M> {
                 sigma_ln_duration,
                 cov_ln: sigmas.shared - sigma_ln_force * sigma_ln_force,
                 asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
+                trigger_margin: (peak - p.trigger) / (self.noise * M::sqrt(gain2)),
             }),
         }
     }
@@ -1352,6 +1353,7 @@ impl<M: Backend> Detector<M> {
                 sigma_ln_duration: M::sqrt(t2 + floor2),
                 cov_ln: cov,
                 asymmetry: 0.0,
+                trigger_margin: f32::INFINITY,
             }),
         }
     }

@@ -35,7 +35,7 @@ pub mod shape_fit;
 pub mod thornton;
 
 pub use chain_bias::ChainBias;
-pub use classifier::{Measurement, RejectReason, Verdict};
+pub use classifier::{Measurement, RejectReason, TRIGGER_MARGIN, Verdict};
 pub use counters::Counters;
 pub use detector::{Detection, Detector};
 pub use envelope::{Envelope, Range, Side};

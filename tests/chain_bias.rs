@@ -73,6 +73,7 @@ fn a_tolerance_lowers_the_posterior_and_keeps_the_class() {
             sigma_ln_duration: 0.01,
             cov_ln: -1e-4,
             asymmetry: 0.0,
+            trigger_margin: f32::INFINITY,
         };
         let (a, b) = (exact.classify(&m), known.classify(&m));
         assert_eq!(a.forced_choice(), b.forced_choice());

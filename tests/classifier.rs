@@ -21,6 +21,7 @@ fn exact(mat: Material, r: f64, u: f64) -> Measurement {
         sigma_ln_duration: 0.0,
         cov_ln: 0.0,
         asymmetry: 0.0,
+        trigger_margin: f32::INFINITY,
     }
 }
 
@@ -46,6 +47,7 @@ fn inversion_round_trip_over_the_scene() {
                     sigma_ln_duration: 0.0,
                     cov_ln: 0.0,
                     asymmetry: 0.0,
+                    trigger_margin: f32::INFINITY,
                 };
                 let inv = scene.invert(ci, &m).unwrap();
                 assert!(
@@ -179,10 +181,45 @@ fn bad_measurements_are_rejected_not_panicking() {
             sigma_ln_duration: -1.0,
             cov_ln: f32::NAN,
             asymmetry: 0.0,
+            trigger_margin: f32::INFINITY,
         };
         assert_eq!(
             scene.classify(&m),
             Verdict::Rejected(coalshock::RejectReason::Implausible)
+        );
+    }
+}
+
+/// A pulse measured less than `TRIGGER_MARGIN` standard deviations above its trigger gets no
+/// `Class` verdict, whatever its posterior: the same exact gangue impact is `Class` at the
+/// margin and `Ambiguous`, with the same best class and posterior, just below it (and for a
+/// margin that is not a number).
+#[test]
+fn a_pulse_near_its_trigger_is_ambiguous() {
+    let scene = Scene::paper().unwrap();
+    let clear = Measurement {
+        sigma_ln_force: 0.01,
+        sigma_ln_duration: 0.01,
+        cov_ln: -1e-4,
+        trigger_margin: coalshock::TRIGGER_MARGIN,
+        ..exact(Material::SANDSTONE, 0.03, 4.5)
+    };
+    let Verdict::Class { class, posterior } = scene.classify(&clear) else {
+        panic!("{:?}", scene.classify(&clear));
+    };
+    assert_eq!(class, GANGUE);
+    for margin in [coalshock::TRIGGER_MARGIN - 1e-3, 0.0, -5.0, f32::NAN] {
+        let near = Measurement {
+            trigger_margin: margin,
+            ..clear
+        };
+        assert_eq!(
+            scene.classify(&near),
+            Verdict::Ambiguous {
+                best: class,
+                posterior
+            },
+            "margin {margin}"
         );
     }
 }

@@ -93,6 +93,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
             sigma_ln_duration: 0.1 * rng.uniform() as f32,
             cov_ln: 0.0,
             asymmetry: 0.0,
+            trigger_margin: f32::INFINITY,
         };
         let (v, lls) = scene.classify_with_likelihoods(&m);
         assert_eq!(v, scene.classify(&m));
@@ -105,6 +106,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
         sigma_ln_duration: 0.0,
         cov_ln: 0.0,
         asymmetry: 0.0,
+        trigger_margin: f32::INFINITY,
     };
     assert_eq!(scene.classify_with_likelihoods(&bad).1, None);
 }
