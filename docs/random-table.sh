@@ -176,11 +176,14 @@ faint=docs/faint/faint_rigid.toml
     echo "its peak above the trigger (\`Measurement::trigger_margin\`) gets no \`Class\` verdict: it"
     echo "is \`Ambiguous\`, with its best class and posterior (22 of the 81 confident verdicts below"
     echo "6 noise RMS were wrong without that rule, 0.98 % of the scene's confident verdicts, at"
-    echo "49.9 % coverage, at commit 7fef504)."
+    echo "49.9 % coverage, at commit 7fef504). The reference counts each impact with the probability"
+    echo "that a matched filter at the trigger's false-alarm rate finds it (\"found at the limit\"),"
+    echo "where the kernel's detector triggers on one sample: most of the gap is the impacts the"
+    echo "kernel misses (\"missed\")."
     echo
     echo '```'
     "$bin" evaluate --scene "$faint" --n "$n" --seed "$seed" 2>&1 |
-        sed -n '/^  forced-choice accuracy/p;/^  coverage (decided)/p;/^  confident-error rate/p;/^  ambiguous \//p;/^  reference limit/p;/calibration error over/p;/^by peak/,/^$/p'
+        sed -n '/^  forced-choice accuracy/p;/^  coverage (decided)/p;/^  confident-error rate/p;/^  ambiguous \//p;/^  reference limit/p;/^  found at the limit/p;/calibration error over/p;/^by peak/,/^$/p'
     echo '```'
 } >> docs/random.md
 echo "wrote docs/random.md" >&2

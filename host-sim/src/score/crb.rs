@@ -101,11 +101,8 @@ pub fn feature_crb(
     pulse: &ForcePulse,
     onset_fraction: f64,
 ) -> Option<FeatureCovariance> {
-    let fs = sensor.sample_rate_hz();
     let d = pulse.duration_s;
-    let pulse_samples = (d * fs).ceil() as usize + 1;
-    let n = MARGIN_SAMPLES + pulse_samples + MARGIN_SAMPLES.max(pulse_samples);
-    let t0 = (MARGIN_SAMPLES as f64 + onset_fraction) / fs;
+    let (n, t0) = window(sensor, pulse, onset_fraction);
     // The chain's output for the pulse with log time scale `c` and onset `onset_s`.
     let output = |c: f64, onset_s: f64| -> Vec<f64> {
         let scale = (-c).exp();
@@ -123,6 +120,42 @@ pub fn feature_crb(
     let variance = sample_variance_counts2(sensor.spec().noise_rms_counts);
     let inv = invert_spd(&fisher(&[s0, ds_dc, ds_dt0, ones], variance))?;
     Some([inv[0][0], inv[1][1], inv[0][1]])
+}
+
+/// The window of [`feature_crb`] for `pulse` with its onset `onset_fraction` of a sample
+/// after a sample instant: its length in samples and the onset's time in s.
+fn window(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> (usize, f64) {
+    let fs = sensor.sample_rate_hz();
+    let pulse_samples = (pulse.duration_s * fs).ceil() as usize + 1;
+    let n = MARGIN_SAMPLES + pulse_samples + MARGIN_SAMPLES.max(pulse_samples);
+    (n, (MARGIN_SAMPLES as f64 + onset_fraction) / fs)
+}
+
+/// The matched filter's signal-to-noise ratio of `pulse` (its `start_s` ignored) sampled by
+/// `sensor` with its onset `onset_fraction` of a sample after a sample instant:
+/// `d = sqrt(sum_n s_n^2 / sigma^2)`, with `s_n` the chain's noiseless output (counts) in the
+/// white noise `sigma^2` of [`sample_variance_counts2`] (the square root of the amplitude's
+/// Fisher information `J_aa` of the module docs, baseline known). A detector that knows the
+/// pulse's shape and correlates it with the samples at every offset finds it, at a
+/// false-alarm rate `Q(eta)` per offset, with probability `Phi(d - eta)` (Neyman-Pearson).
+pub fn matched_filter_snr(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> f64 {
+    let (n, t0) = window(sensor, pulse, onset_fraction);
+    let force = FnForce(|t: f64| pulse.force_at(t - t0));
+    let energy: f64 = sensor
+        .analog_counts(&force, n, 0.0)
+        .iter()
+        .map(|v| v * v)
+        .sum();
+    (energy / sample_variance_counts2(sensor.spec().noise_rms_counts)).sqrt()
+}
+
+/// [`matched_filter_snr`] averaged over `phases` onsets evenly spread over one sample.
+pub fn phase_averaged_snr(sensor: &Sensor, pulse: &ForcePulse, phases: usize) -> f64 {
+    let p = phases.max(1);
+    (0..p)
+        .map(|k| matched_filter_snr(sensor, pulse, k as f64 / p as f64))
+        .sum::<f64>()
+        / p as f64
 }
 
 /// [`feature_crb`] averaged over `phases` onsets evenly spread over one sample (`k / phases`
@@ -184,6 +217,40 @@ mod tests {
         );
     }
 
+    /// `f_max sin(pi t / t_s)` over `t_s` s, as a series of 4097 points.
+    fn half_sine(f_max: f64, t_s: f64) -> ForcePulse {
+        ForcePulse {
+            start_s: 0.0,
+            duration_s: t_s,
+            scale: 1.0,
+            shape: PulseShape::Series {
+                step_s: t_s / 4096.0,
+                force_n: (0..=4096)
+                    .map(|k| f_max * (std::f64::consts::PI * k as f64 / 4096.0).sin())
+                    .collect(),
+            },
+        }
+    }
+
+    #[test]
+    fn matched_filter_snr_of_a_long_half_sine_is_its_energy_over_the_noise() {
+        // F sin(pi t / T) over N_p = T f_s samples on a rigid chain of g counts per N: the
+        // samples' energy is (g F)^2 N_p / 2 (the mean of sin^2), so d = g F sqrt(N_p / 2) /
+        // sigma, sigma^2 = 16 + 1/12, at every onset phase.
+        let sensor = rigid(4.0);
+        let g = sensor.counts_per_newton();
+        let t = 4e-4; // 40 samples
+        let f_max = 50.0;
+        let pulse = half_sine(f_max, t);
+        let expected = g * f_max * (40.0f64 / 2.0).sqrt() / (16.0f64 + 1.0 / 12.0).sqrt();
+        for phase in [0.0, 0.3, 0.7] {
+            let d = matched_filter_snr(&sensor, &pulse, phase);
+            assert!((d / expected - 1.0).abs() < 1e-3, "{d} against {expected}");
+        }
+        let d = phase_averaged_snr(&sensor, &pulse, 4);
+        assert!((d / expected - 1.0).abs() < 1e-3, "{d} against {expected}");
+    }
+
     #[test]
     fn feature_bound_of_a_long_half_sine_matches_its_closed_form() {
         // A half-sine F sin(pi t / T) of N_p = T f_s samples in noise sigma: with the shape,
@@ -198,17 +265,7 @@ mod tests {
         let g = sensor.counts_per_newton();
         let t = 4e-4; // 40 samples
         let f_max = 2000.0;
-        let pulse = ForcePulse {
-            start_s: 0.0,
-            duration_s: t,
-            scale: 1.0,
-            shape: PulseShape::Series {
-                step_s: t / 4096.0,
-                force_n: (0..=4096)
-                    .map(|k| f_max * (std::f64::consts::PI * k as f64 / 4096.0).sin())
-                    .collect(),
-            },
-        };
+        let pulse = half_sine(f_max, t);
         let var = sample_variance_counts2(4.0);
         let np = t * 100_000.0;
         let known = 2.0 * var / ((g * f_max).powi(2) * np);

@@ -1455,6 +1455,8 @@ impl Evaluation {
              \x20 reference limit             {:7.3} % +- {:.3} % ({} draws, {} features, \
              duration {:?}, Cramer-Rao sigma ln F {:.4}, ln t_c {:.4})\n\
              \x20 noiseless ceiling           {:7.3} % +- {:.3} %\n\
+             \x20 found at the limit          {:7.3} % (matched filter at {} noise RMS: the \
+             trigger's false-alarm rate)\n\
              \x20 coverage at the limit       {:7.3} % (Bayes posterior >= {:.4} under the \
              scene's priors; {:.3} % of those wrong)\n\
              \x20 kernel - reference          {:+7.3} pp +- {:.3} pp\n\
@@ -1468,6 +1470,8 @@ impl Evaluation {
             r.mean_sigma_ln_duration,
             100.0 * r.noiseless_accuracy,
             100.0 * r.noiseless_std_error,
+            100.0 * r.detected_share,
+            r.detection_sigmas,
             100.0 * r.coverage,
             r.confidence_threshold,
             100.0 * r.confident_error_rate,

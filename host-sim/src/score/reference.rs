@@ -34,14 +34,22 @@
 //! 5. **Accuracy.** Monte Carlo over fresh draws of each class's prior: the exact features
 //!    `g(z)` plus Gaussian noise of covariance `S(z)`, decided by the largest
 //!    `prior_c p(f | c)`; class results weighted by the normalised priors, with the standard
-//!    error `sqrt(a (1 - a) / n)`. The same draws decided without noise give the noiseless
-//!    ceiling of the scene's physics. For a law integrated, both duration features are
-//!    scored on the same draws and the larger accuracy is the limit.
+//!    error `sqrt(a (1 - a) / n)`. Each draw counts with the probability that its pulse is
+//!    found at all, `Phi(d - eta)`: `d` the matched filter's signal-to-noise ratio of the
+//!    sampled pulse through the chain ([`crate::score::crb::matched_filter_snr`], bilinear in
+//!    `ln d` between grid points), `eta` the scene's `trigger_sigmas`, so that the filter's
+//!    false-alarm rate per offset, `Q(eta)`, is the kernel's trigger's per sample (a missed
+//!    impact is decided neither right nor wrong). The same draws decided without noise give
+//!    the noiseless ceiling of the scene's physics (every pulse found). For a law integrated,
+//!    both duration features are scored on the same draws and the larger accuracy is the
+//!    limit.
 //!
 //! The limit is an upper bound of what a detector of the features can reach in so far as the
 //! bound is reached (the Cramér-Rao bound is the variance of an efficient estimator; at low
 //! signal-to-noise ratio real estimators do worse), the pulse shape is known to the estimator
-//! (only amplitude, time scale, onset and baseline unknown), and the ADC does not clip.
+//! (only amplitude, time scale, onset and baseline unknown; the detection's filter knows the
+//! time scale too, which a bank of filters over the scene's durations approaches), and the
+//! ADC does not clip.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -56,7 +64,7 @@ use crate::scene::{SceneError, SceneFile};
 use crate::score::bayes::{
     ClassModel, FeatureNoise, class_models, gauss_legendre, gauss_pair, phi,
 };
-use crate::score::crb::{FeatureCovariance, phase_averaged_crb};
+use crate::score::crb::{FeatureCovariance, phase_averaged_crb, phase_averaged_snr};
 use crate::sim::sensor::{ForcePulse, PulseShape, Sensor};
 
 /// Default grid points per axis of a class's `(ln R, ln u)` box.
@@ -182,6 +190,12 @@ pub struct ReferenceLimit {
     /// The prior-weighted share of those confident draws decided wrong (at most
     /// `1 - confidence_threshold` when the Bayes posteriors are exact, whatever the priors).
     pub confident_error_rate: f64,
+    /// The prior-weighted share of the impacts found at all: the mean over the draws of the
+    /// matched filter's detection probability `Phi(d - detection_sigmas)` (module docs,
+    /// step 5; 1 when every pulse stands far above the noise).
+    pub detected_share: f64,
+    /// The matched filter's threshold in noise RMS (the scene's `trigger_sigmas`).
+    pub detection_sigmas: f64,
 }
 
 /// A class's pulses at the points of its grid (see [`ClassMap::build_both`]).
@@ -235,22 +249,30 @@ impl GridPulses<'_> {
             },
         };
         let cov = phase_averaged_crb(self.sensor, &pulse, self.phases);
+        let snr = phase_averaged_snr(self.sensor, &pulse, self.phases);
         let hertz_f = self.model.forward(x, y);
         let deviation = |f: [f64; 2]| [f[0] - hertz_f.0, f[1] - hertz_f.1];
         Ok([
-            node(deviation(zero_f), cov),
-            node(deviation(impulse_f), cov),
+            node(deviation(zero_f), cov, snr),
+            node(deviation(impulse_f), cov, snr),
         ])
     }
 }
 
-/// One grid point: deviation from the Hertz power laws, log standard deviations, correlation.
+/// One grid point: deviation from the Hertz power laws, log standard deviations, correlation,
+/// and the log of the matched filter's signal-to-noise ratio ([`crate::score::crb::
+/// matched_filter_snr`], capped at [`DETECTED_SNR`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Node {
     deviation: [f64; 2],
     ln_sigma: [f64; 2],
     correlation: f64,
+    ln_snr: f64,
 }
+
+/// The matched filter's signal-to-noise ratio taken for a pulse that is certainly found (and
+/// the cap of every grid point's): `Phi(1e6 - eta)` is 1 in f64.
+const DETECTED_SNR: f64 = 1e6;
 
 /// The features and their bound at one point of a class's box.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -261,6 +283,9 @@ pub struct LocalFeatures {
     pub jacobian: [[f64; 2]; 2],
     /// `[var ln F, var ln t_c, cov]` of the bound.
     pub covariance: FeatureCovariance,
+    /// The probability that the pulse is found at all, `Phi(d - eta)`: `d` the matched
+    /// filter's signal-to-noise ratio, `eta` the map's [`ClassMap::detection_sigmas`].
+    pub detection: f64,
 }
 
 /// One class's features and noise over its prior box, interpolated from a grid.
@@ -273,6 +298,9 @@ pub struct ClassMap {
     features: &'static str,
     duration: DurationFeature,
     nodes: Vec<Node>,
+    /// The matched filter's threshold `eta` in noise RMS: the scene's `trigger_sigmas`, so
+    /// that its false-alarm rate per offset, `Q(eta)`, is the trigger's per sample.
+    pub detection_sigmas: f64,
 }
 
 impl ClassMap {
@@ -333,6 +361,7 @@ impl ClassMap {
             },
             duration,
             nodes,
+            detection_sigmas: f64::from(scene.settings.trigger_sigmas),
         };
         Ok([
             map(DurationFeature::FirstZero, first_zero),
@@ -340,7 +369,7 @@ impl ClassMap {
         ])
     }
 
-    /// The same map with the noise replaced by `noise` everywhere.
+    /// The same map with the noise replaced by `noise` everywhere, and every pulse found.
     pub fn with_constant_noise(mut self, noise: &FeatureNoise) -> Self {
         let cov = [
             noise.sigma_ln_force.powi(2),
@@ -348,7 +377,7 @@ impl ClassMap {
             noise.correlation * noise.sigma_ln_force * noise.sigma_ln_duration,
         ];
         for n in &mut self.nodes {
-            *n = node(n.deviation, Some(cov));
+            *n = node(n.deviation, Some(cov), DETECTED_SNR);
         }
         self
     }
@@ -384,11 +413,13 @@ impl ClassMap {
         let sf = lerp(&|n| n.ln_sigma[0]).0.exp();
         let st = lerp(&|n| n.ln_sigma[1]).0.exp();
         let r = lerp(&|n| n.correlation).0;
+        let snr = lerp(&|n| n.ln_snr).0.exp();
         let (hf, ht) = self.model.forward(x, y);
         LocalFeatures {
             features: [hf + df, ht + dt],
             jacobian: [[2.0 + dfx, 1.2 + dfy], [1.0 + dtx, -0.2 + dty]],
             covariance: [sf * sf, st * st, r * sf * st],
+            detection: phi(snr - self.detection_sigmas),
         }
     }
 
@@ -481,19 +512,23 @@ fn grid_point(model: &ClassModel, n: usize, i: usize, j: usize) -> (f64, f64) {
     (x0 + (x1 - x0) * t(i), y0 + (y1 - y0) * t(j))
 }
 
-/// A grid node from its deviation and its covariance (`None`: no information).
-fn node(deviation: [f64; 2], cov: Option<FeatureCovariance>) -> Node {
+/// A grid node from its deviation, its covariance (`None`: no information) and the matched
+/// filter's signal-to-noise ratio `snr`.
+fn node(deviation: [f64; 2], cov: Option<FeatureCovariance>, snr: f64) -> Node {
     let wide = NO_INFORMATION_SIGMA.ln();
+    let ln_snr = snr.clamp(1e-12, DETECTED_SNR).ln();
     match cov {
         Some([vf, vt, c]) if vf > 0.0 && vt > 0.0 && vf.is_finite() && vt.is_finite() => Node {
             deviation,
             ln_sigma: [0.5 * vf.ln(), 0.5 * vt.ln()],
             correlation: (c / (vf * vt).sqrt()).clamp(-0.999, 0.999),
+            ln_snr,
         },
         _ => Node {
             deviation,
             ln_sigma: [wide, wide],
             correlation: 0.0,
+            ln_snr,
         },
     }
 }
@@ -585,7 +620,7 @@ pub fn reference_accuracy(
     let total_prior: f64 = maps.iter().map(|m| m.model.prior).sum();
     let n = draws_per_class.max(1);
     let (mut acc, mut acc0, mut sum_sf, mut sum_st) = (0.0, 0.0, 0.0, 0.0);
-    let (mut covered, mut covered_wrong) = (0.0, 0.0);
+    let (mut covered, mut covered_wrong, mut detected_share) = (0.0, 0.0, 0.0);
     let mut per_class_accuracy = Vec::with_capacity(maps.len());
     for (i, m) in maps.iter().enumerate() {
         let ClassDraws {
@@ -593,6 +628,7 @@ pub fn reference_accuracy(
             right0,
             sure,
             sure_wrong,
+            detected,
         } = draw_class(
             maps,
             i,
@@ -602,12 +638,13 @@ pub fn reference_accuracy(
             (&mut sum_sf, &mut sum_st),
         );
         let w = m.model.prior / total_prior;
-        let a = right as f64 / n as f64;
+        let a = right / n as f64;
         per_class_accuracy.push(a);
         acc += w * a;
         acc0 += w * right0 as f64 / n as f64;
-        covered += w * sure as f64 / n as f64;
-        covered_wrong += w * sure_wrong as f64 / n as f64;
+        covered += w * sure / n as f64;
+        covered_wrong += w * sure_wrong / n as f64;
+        detected_share += w * detected / n as f64;
     }
     let draws = n * maps.len();
     let se = |a: f64| (a * (1.0 - a) / draws as f64).sqrt();
@@ -633,6 +670,8 @@ pub fn reference_accuracy(
         } else {
             0.0
         },
+        detected_share,
+        detection_sigmas: maps.first().map_or(0.0, |m| m.detection_sigmas),
     }
 }
 
@@ -646,19 +685,24 @@ fn features_of(maps: &[ClassMap]) -> &'static str {
     }
 }
 
-/// What the draws of one class gave (see [`draw_class`]).
+/// What the draws of one class gave (see [`draw_class`]), each noisy draw weighted by the
+/// probability that its pulse is found.
 struct ClassDraws {
-    /// Right decisions on the noisy features, and on the noiseless ones.
-    right: usize,
+    /// Right decisions on the noisy features (found), and on the noiseless ones.
+    right: f64,
     right0: usize,
     /// Confident decisions (posterior at the threshold or above), and the wrong among them.
-    sure: usize,
-    sure_wrong: usize,
+    sure: f64,
+    sure_wrong: f64,
+    /// The sum of the draws' detection probabilities.
+    detected: f64,
 }
 
 /// `n` draws of class `i` of `maps` from `uniform`, each decided on its features with the
 /// bound's correlated Gaussian noise ([`decide_with_posterior`], confident at
-/// `confidence_threshold`) and without noise ([`decide`]); each draw's `sigma ln F` and
+/// `confidence_threshold`), weighted by the probability that its pulse is found
+/// ([`LocalFeatures::detection`]: a pulse not found is decided neither right nor wrong, as a
+/// missed impact is scored), and without noise ([`decide`]); each draw's `sigma ln F` and
 /// `sigma ln t` are added to `sums`, in draw order.
 fn draw_class(
     maps: &[ClassMap],
@@ -671,10 +715,11 @@ fn draw_class(
     let m = &maps[i];
     let (sum_sf, sum_st) = sums;
     let mut d = ClassDraws {
-        right: 0,
+        right: 0.0,
         right0: 0,
-        sure: 0,
-        sure_wrong: 0,
+        sure: 0.0,
+        sure_wrong: 0.0,
+        detected: 0.0,
     };
     for _ in 0..n {
         let (x, y) = m.model.sample(uniform(), uniform());
@@ -689,10 +734,12 @@ fn draw_class(
             f[1] + st * (r * g1 + (1.0 - r * r).max(0.0).sqrt() * g2),
         ];
         let (class, posterior) = decide_with_posterior(maps, noisy);
-        d.right += (class == i) as usize;
+        let found = l.detection;
+        d.detected += found;
+        d.right += found * f64::from(u8::from(class == i));
         if posterior >= confidence_threshold {
-            d.sure += 1;
-            d.sure_wrong += (class != i) as usize;
+            d.sure += found;
+            d.sure_wrong += found * f64::from(u8::from(class != i));
         }
         d.right0 += (decide(maps, f, false) == i) as usize;
         *sum_sf += sf;
