@@ -117,14 +117,16 @@ impl RejectReason {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Verdict {
     /// The class with posterior at least the scene's confidence threshold,
-    /// `1 - confident_error_rate`.
+    /// `1 - confident_error_rate`, of a pulse [`TRIGGER_MARGIN`] standard deviations or more
+    /// above its trigger.
     Class {
         /// Index into [`Scene::classes`].
         class: u8,
         /// Posterior probability of that class.
         posterior: f32,
     },
-    /// Inside the overlap of two or more envelopes: no class reaches the confidence threshold.
+    /// Inside the overlap of two or more envelopes: no class reaches the confidence threshold
+    /// (or the pulse lies within [`TRIGGER_MARGIN`] standard deviations of its trigger).
     Ambiguous {
         /// The most probable class (the forced choice).
         best: u8,
@@ -257,7 +259,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
-    ///                   trigger_margin: f32::INFINITY };
+    ///                       trigger_margin: f32::INFINITY };
     /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
@@ -405,7 +407,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
-    ///                   trigger_margin: f32::INFINITY };
+    ///                       trigger_margin: f32::INFINITY };
     /// let (x, y, noise) = scene.located(0, &m).unwrap();
     /// let inv = scene.invert(0, &m).unwrap();
     /// assert!((x.exp() / inv.radius_m - 1.0).abs() < 1e-5);
