@@ -92,15 +92,26 @@ pub fn invert_spd(m: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
 /// Covariance of `(ln F_max, ln t_c)`: `[var ln F, var ln t_c, cov]`.
 pub type FeatureCovariance = [f64; 3];
 
-/// The Cramér-Rao bound of `(ln F_max, ln t_c)` of `pulse` (its `start_s` ignored) sampled by
-/// `sensor` with its onset `onset_fraction` of a sample after a sample instant (see the
-/// module docs); `None` when the Fisher matrix is singular (a pulse that leaves no trace in
-/// the samples).
-pub fn feature_crb(
-    sensor: &Sensor,
-    pulse: &ForcePulse,
-    onset_fraction: f64,
-) -> Option<FeatureCovariance> {
+/// What the samples of one pulse allow: the Cramér-Rao bound of its features and its matched
+/// filter's signal-to-noise ratio (see [`pulse_bound`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PulseBound {
+    /// The bound of `(ln F_max, ln t_c)`; `None` when the Fisher matrix is singular (a pulse
+    /// that leaves no trace in the samples).
+    pub covariance: Option<FeatureCovariance>,
+    /// The matched filter's signal-to-noise ratio `d = sqrt(sum_n s_n^2 / sigma^2)`, with `s_n`
+    /// the chain's noiseless output (counts) in the white noise `sigma^2` of
+    /// [`sample_variance_counts2`]: the square root of the amplitude's Fisher information
+    /// `J_aa` of the module docs (baseline known). A detector that knows the pulse's shape and
+    /// correlates it with the samples at every offset finds it, at a false-alarm rate
+    /// `Q(eta)` per offset, with probability `Phi(d - eta)` (Neyman-Pearson).
+    pub snr: f64,
+}
+
+/// The [`PulseBound`] of `pulse` (its `start_s` ignored) sampled by `sensor` with its onset
+/// `onset_fraction` of a sample after a sample instant (see the module docs): one pass of
+/// the pulse and its derivative waveforms through the chain gives both.
+pub fn pulse_bound(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> PulseBound {
     let d = pulse.duration_s;
     let (n, t0) = window(sensor, pulse, onset_fraction);
     // The chain's output for the pulse with log time scale `c` and onset `onset_s`.
@@ -118,11 +129,24 @@ pub fn feature_crb(
     let ds_dt0 = diff(output(0.0, t0 + ht), output(0.0, t0 - ht), ht);
     let ones = vec![1.0; n];
     let variance = sample_variance_counts2(sensor.spec().noise_rms_counts);
-    let inv = invert_spd(&fisher(&[s0, ds_dc, ds_dt0, ones], variance))?;
-    Some([inv[0][0], inv[1][1], inv[0][1]])
+    let j = fisher(&[s0, ds_dc, ds_dt0, ones], variance);
+    PulseBound {
+        covariance: invert_spd(&j).map(|inv| [inv[0][0], inv[1][1], inv[0][1]]),
+        snr: j[0][0].sqrt(),
+    }
 }
 
-/// The window of [`feature_crb`] for `pulse` with its onset `onset_fraction` of a sample
+/// The Cramér-Rao bound of `(ln F_max, ln t_c)` of `pulse` at one onset: the covariance of
+/// [`pulse_bound`].
+pub fn feature_crb(
+    sensor: &Sensor,
+    pulse: &ForcePulse,
+    onset_fraction: f64,
+) -> Option<FeatureCovariance> {
+    pulse_bound(sensor, pulse, onset_fraction).covariance
+}
+
+/// The window of [`pulse_bound`] for `pulse` with its onset `onset_fraction` of a sample
 /// after a sample instant: its length in samples and the onset's time in s.
 fn window(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> (usize, f64) {
     let fs = sensor.sample_rate_hz();
@@ -131,50 +155,36 @@ fn window(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> (usize, f
     (n, (MARGIN_SAMPLES as f64 + onset_fraction) / fs)
 }
 
-/// The matched filter's signal-to-noise ratio of `pulse` (its `start_s` ignored) sampled by
-/// `sensor` with its onset `onset_fraction` of a sample after a sample instant:
-/// `d = sqrt(sum_n s_n^2 / sigma^2)`, with `s_n` the chain's noiseless output (counts) in the
-/// white noise `sigma^2` of [`sample_variance_counts2`] (the square root of the amplitude's
-/// Fisher information `J_aa` of the module docs, baseline known). A detector that knows the
-/// pulse's shape and correlates it with the samples at every offset finds it, at a
-/// false-alarm rate `Q(eta)` per offset, with probability `Phi(d - eta)` (Neyman-Pearson).
-pub fn matched_filter_snr(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> f64 {
-    let (n, t0) = window(sensor, pulse, onset_fraction);
-    let force = FnForce(|t: f64| pulse.force_at(t - t0));
-    let energy: f64 = sensor
-        .analog_counts(&force, n, 0.0)
-        .iter()
-        .map(|v| v * v)
-        .sum();
-    (energy / sample_variance_counts2(sensor.spec().noise_rms_counts)).sqrt()
-}
-
-/// [`matched_filter_snr`] averaged over `phases` onsets evenly spread over one sample.
-pub fn phase_averaged_snr(sensor: &Sensor, pulse: &ForcePulse, phases: usize) -> f64 {
+/// [`pulse_bound`] averaged over `phases` onsets evenly spread over one sample (`k / phases`
+/// of a sample, `k = 0 .. phases`): the covariance (`None` when any phase gives `None`) and
+/// the signal-to-noise ratio of an impact whose onset is uniform within a sample.
+pub fn phase_averaged_bound(sensor: &Sensor, pulse: &ForcePulse, phases: usize) -> PulseBound {
     let p = phases.max(1);
-    (0..p)
-        .map(|k| matched_filter_snr(sensor, pulse, k as f64 / p as f64))
-        .sum::<f64>()
-        / p as f64
+    let mut sum = Some([0.0; 3]);
+    let mut snr = 0.0;
+    for k in 0..p {
+        let b = pulse_bound(sensor, pulse, k as f64 / p as f64);
+        snr += b.snr;
+        sum = sum.zip(b.covariance).map(|(mut sum, c)| {
+            for (s, v) in sum.iter_mut().zip(c) {
+                *s += v / p as f64;
+            }
+            sum
+        });
+    }
+    PulseBound {
+        covariance: sum,
+        snr: snr / p as f64,
+    }
 }
 
-/// [`feature_crb`] averaged over `phases` onsets evenly spread over one sample (`k / phases`
-/// of a sample, `k = 0 .. phases`): the covariance of an impact whose onset is uniform within
-/// a sample. `None` when any phase gives `None`.
+/// The covariance of [`phase_averaged_bound`].
 pub fn phase_averaged_crb(
     sensor: &Sensor,
     pulse: &ForcePulse,
     phases: usize,
 ) -> Option<FeatureCovariance> {
-    let p = phases.max(1);
-    let mut sum = [0.0; 3];
-    for k in 0..p {
-        let c = feature_crb(sensor, pulse, k as f64 / p as f64)?;
-        for (s, v) in sum.iter_mut().zip(c) {
-            *s += v / p as f64;
-        }
-    }
-    Some(sum)
+    phase_averaged_bound(sensor, pulse, phases).covariance
 }
 
 #[cfg(test)]
@@ -244,10 +254,10 @@ mod tests {
         let pulse = half_sine(f_max, t);
         let expected = g * f_max * (40.0f64 / 2.0).sqrt() / (16.0f64 + 1.0 / 12.0).sqrt();
         for phase in [0.0, 0.3, 0.7] {
-            let d = matched_filter_snr(&sensor, &pulse, phase);
+            let d = pulse_bound(&sensor, &pulse, phase).snr;
             assert!((d / expected - 1.0).abs() < 1e-3, "{d} against {expected}");
         }
-        let d = phase_averaged_snr(&sensor, &pulse, 4);
+        let d = phase_averaged_bound(&sensor, &pulse, 4).snr;
         assert!((d / expected - 1.0).abs() < 1e-3, "{d} against {expected}");
     }
 

@@ -36,7 +36,7 @@
 //!    `prior_c p(f | c)`; class results weighted by the normalised priors, with the standard
 //!    error `sqrt(a (1 - a) / n)`. Each draw counts with the probability that its pulse is
 //!    found at all, `Phi(d - eta)`: `d` the matched filter's signal-to-noise ratio of the
-//!    sampled pulse through the chain ([`crate::score::crb::matched_filter_snr`], bilinear in
+//!    sampled pulse through the chain ([`crate::score::crb::PulseBound::snr`], bilinear in
 //!    `ln d` between grid points), `eta` the scene's `trigger_sigmas`, so that the filter's
 //!    false-alarm rate per offset, `Q(eta)`, is the kernel's trigger's per sample (a missed
 //!    impact is decided neither right nor wrong). The same draws decided without noise give
@@ -64,7 +64,7 @@ use crate::scene::{SceneError, SceneFile};
 use crate::score::bayes::{
     ClassModel, FeatureNoise, class_models, gauss_legendre, gauss_pair, phi,
 };
-use crate::score::crb::{FeatureCovariance, phase_averaged_crb, phase_averaged_snr};
+use crate::score::crb::{FeatureCovariance, phase_averaged_bound};
 use crate::sim::sensor::{ForcePulse, PulseShape, Sensor};
 
 /// Default grid points per axis of a class's `(ln R, ln u)` box.
@@ -248,8 +248,8 @@ impl GridPulses<'_> {
                     .collect(),
             },
         };
-        let cov = phase_averaged_crb(self.sensor, &pulse, self.phases);
-        let snr = phase_averaged_snr(self.sensor, &pulse, self.phases);
+        let bound = phase_averaged_bound(self.sensor, &pulse, self.phases);
+        let (cov, snr) = (bound.covariance, bound.snr);
         let hertz_f = self.model.forward(x, y);
         let deviation = |f: [f64; 2]| [f[0] - hertz_f.0, f[1] - hertz_f.1];
         Ok([
@@ -261,7 +261,7 @@ impl GridPulses<'_> {
 
 /// One grid point: deviation from the Hertz power laws, log standard deviations, correlation,
 /// and the log of the matched filter's signal-to-noise ratio ([`crate::score::crb::
-/// matched_filter_snr`], capped at [`DETECTED_SNR`]).
+/// PulseBound::snr`], capped at [`DETECTED_SNR`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Node {
     deviation: [f64; 2],
