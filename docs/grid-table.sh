@@ -80,7 +80,7 @@ cut -f1 "$work/list.tsv" | xargs -P "$jobs" -I{} sh -c \
 python3 - "$work" "$n" "$seed" > docs/grid.md <<'EOF'
 import json, os, sys
 sys.path.insert(0, "docs")
-from targets import check  # noqa: E402
+from targets import check, print_misses, print_refused, refusal  # noqa: E402
 work, n, seed = sys.argv[1], sys.argv[2], sys.argv[3]
 rows, misses = [], {"forced choice": [], "confident errors": [], "calibration": [], "failed": []}
 refused = []
@@ -91,8 +91,8 @@ for line in open(os.path.join(work, "list.tsv")):
         d = json.load(open(path))
     except (OSError, ValueError):
         err = open(os.path.join(work, name + ".err")).read()
-        if "the kernel refused the scene" in err:
-            why = err[err.index("the kernel refused the scene"):].splitlines()[0]
+        why = refusal(err)
+        if why:
             refused.append(name)
             rows.append("| %s | %s | %s | %s | %s | refused | | | | | | %s |" % (
                 law, e, rate, noise, priors, why))
@@ -124,10 +124,8 @@ print("- *confident errors*: more than 1 % of its `Class` verdicts are wrong;")
 print("- *calibration*: a reliability bin of at least 200 verdicts has `|stated - observed|` above")
 print("  2 pp beyond two of the bin's standard errors.\n")
 print("## Misses\n")
-for k, v in misses.items():
-    print("- %s: %d of %d%s" % (k, len(v), total, (" (" + ", ".join(v) + ")") if v else ""))
-print("\nRefused by the kernel at the scene build (not counted above): %d%s" % (
-    len(refused), (" (" + ", ".join(refused) + ")") if refused else ""))
+print_misses(misses, total)
+print_refused(refused)
 print("\n## Every scene\n")
 print("| law | e | rate (Hz) | noise (counts) | priors coal : gangue | forced choice (%) | reference (%) | kernel - reference (pp) | coverage (%) | confident errors (%) | calibration error max (pp) | targets |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|")

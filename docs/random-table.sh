@@ -103,7 +103,7 @@ cut -f1 "$work/list.tsv" | xargs -P "$jobs" -I{} sh -c \
 python3 - "$work" "$n" "$seed" "$count" "$scene_seed" > docs/random.md <<'EOF'
 import json, os, re, sys
 sys.path.insert(0, "docs")
-from targets import check  # noqa: E402
+from targets import check, names, print_misses, print_refused, refusal  # noqa: E402
 work, n, seed, count, scene_seed = sys.argv[1:6]
 rows, misses, causes, refused, failed = [], {"forced choice": [], "confident errors": [], "calibration": []}, {}, [], []
 for line in open(os.path.join(work, "list.tsv")):
@@ -113,8 +113,8 @@ for line in open(os.path.join(work, "list.tsv")):
     try:
         d = json.load(open(os.path.join(work, name + ".json")))
     except (OSError, ValueError):
-        if "the kernel refused the scene" in err:
-            why = err[err.index("the kernel refused the scene"):].splitlines()[0]
+        why = refusal(err)
+        if why:
             refused.append(name)
             rows.append(head + " refused | | | | | | | | %s |" % why)
         else:
@@ -150,12 +150,10 @@ print("at least 200 verdicts). A row that misses names its causes: *clips* (the 
 print("predicts more than 1 % of the impacts at the ADC's full scale, and warns) and *faint* (more")
 print("than 5 % of the impacts peak below 10 times the force noise the detector sees).\n")
 print("## Misses\n")
-for key, v in misses.items():
-    print("- %s: %d of %d%s" % (key, len(v), total, (" (" + ", ".join(v) + ")") if v else ""))
+print_misses(misses, total)
 print("- scenes that miss a target, by cause: %s" % (", ".join("%s %d" % kv for kv in sorted(causes.items())) or "none"))
-print("\nRefused by the kernel at the scene build (not counted above): %d%s" % (
-    len(refused), (" (" + ", ".join(refused) + ")") if refused else ""))
-print("Failed to evaluate: %d%s" % (len(failed), (" (" + ", ".join(failed) + ")") if failed else ""))
+print_refused(refused)
+print("Failed to evaluate: %d%s" % (len(failed), names(failed)))
 print("\n## Every scene\n")
 print("| scene | law, e | classes | R (mm) | rate (Hz) | noise (counts) | chain | clipping (%) | below 10 noise (%) | forced choice (%) | reference (%) | kernel - reference (pp) | coverage (%) | confident errors (%) | calibration error max (pp) | targets |")
 print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")

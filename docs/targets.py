@@ -1,4 +1,5 @@
-"""The targets of docs/grid.md, checked on one `host-sim evaluate --json` object.
+"""The targets of docs/grid.md, checked on one `host-sim evaluate --json` object, and the
+lines both tables print about them.
 
 docs/grid-table.sh and docs/random-table.sh import it (run from the repository root with
 docs/ on the path). A row misses a target when:
@@ -27,3 +28,30 @@ def check(d):
     if worst_bin > 0.02:
         fails.append("calibration")
     return fails, gap, se, worst_bin
+
+
+REFUSED = "the kernel refused the scene"
+
+
+def refusal(err):
+    """The kernel's reason for refusing a scene, from `host-sim evaluate`'s stderr, or None."""
+    if REFUSED not in err:
+        return None
+    return err[err.index(REFUSED):].splitlines()[0]
+
+
+def names(v):
+    """` (a, b, c)` for a non-empty list of scene names, else nothing."""
+    return (" (" + ", ".join(v) + ")") if v else ""
+
+
+def print_misses(misses, total):
+    """One line per target: how many of `total` scenes miss it, and which."""
+    for key, v in misses.items():
+        print("- %s: %d of %d%s" % (key, len(v), total, names(v)))
+
+
+def print_refused(refused):
+    """The line of the scenes the kernel refused at the scene build."""
+    print("\nRefused by the kernel at the scene build (not counted above): %d%s" % (
+        len(refused), names(refused)))
