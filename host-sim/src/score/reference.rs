@@ -283,9 +283,33 @@ pub struct LocalFeatures {
     pub jacobian: [[f64; 2]; 2],
     /// `[var ln F, var ln t_c, cov]` of the bound.
     pub covariance: FeatureCovariance,
-    /// The probability that the pulse is found at all, `Phi(d - eta)`: `d` the matched
-    /// filter's signal-to-noise ratio, `eta` the map's [`ClassMap::detection_sigmas`].
-    pub detection: f64,
+}
+
+/// The grid cell about a point of a class's box and the point's place in it (see
+/// [`ClassMap::cell`]).
+struct Cell<'a> {
+    /// The cell's corner nodes: `(x, y)`, `(x + 1, y)`, `(x, y + 1)`, `(x + 1, y + 1)`.
+    corners: [&'a Node; 4],
+    /// The point's fractions of the cell along `x` and `y`.
+    fx: f64,
+    fy: f64,
+    /// `d fraction / d (x, y)` (0 outside the box, where the map is clamped).
+    dgx: f64,
+    dgy: f64,
+}
+
+impl Cell<'_> {
+    /// The bilinear interpolation of `v` over the cell at the point, and its derivatives in
+    /// `x` and `y`.
+    fn lerp(&self, v: impl Fn(&Node) -> f64) -> (f64, f64, f64) {
+        let [a, b, c, d] = self.corners.map(v);
+        let (fx, fy) = (self.fx, self.fy);
+        let value =
+            a * (1.0 - fx) * (1.0 - fy) + b * fx * (1.0 - fy) + c * (1.0 - fx) * fy + d * fx * fy;
+        let d_dx = ((b - a) * (1.0 - fy) + (d - c) * fy) * self.dgx;
+        let d_dy = ((c - a) * (1.0 - fx) + (d - b) * fx) * self.dgy;
+        (value, d_dx, d_dy)
+    }
 }
 
 /// One class's features and noise over its prior box, interpolated from a grid.
@@ -382,45 +406,53 @@ impl ClassMap {
         self
     }
 
-    /// Features, Jacobian and bound at `(x, y) = (ln R, ln u)` (bilinear between grid points,
-    /// clamped to the box: outside it the deviation and the noise of its edge).
-    pub fn at(&self, x: f64, y: f64) -> LocalFeatures {
+    /// The grid cell about `(x, y) = (ln R, ln u)`, clamped to the box.
+    fn cell(&self, x: f64, y: f64) -> Cell<'_> {
         let (x0, x1) = self.model.ln_radius;
         let (y0, y1) = self.model.ln_speed;
         let last = (self.grid - 1) as f64;
-        let cell = |v: f64, lo: f64, hi: f64| -> (usize, f64, f64) {
+        let place = |v: f64, lo: f64, hi: f64| -> (usize, f64, f64) {
             let g = ((v - lo) / (hi - lo) * last).clamp(0.0, last);
             let i = (g.floor() as usize).min(self.grid - 2);
             let inside = v > lo && v < hi;
             (i, g - i as f64, if inside { last / (hi - lo) } else { 0.0 })
         };
-        let (i, fx, dgx) = cell(x, x0, x1);
-        let (j, fy, dgy) = cell(y, y0, y1);
+        let (i, fx, dgx) = place(x, x0, x1);
+        let (j, fy, dgy) = place(y, y0, y1);
         let q = |a: usize, b: usize| &self.nodes[(j + b) * self.grid + i + a];
-        let (n00, n10, n01, n11) = (q(0, 0), q(1, 0), q(0, 1), q(1, 1));
-        let lerp = |v: &dyn Fn(&Node) -> f64| -> (f64, f64, f64) {
-            let (a, b, c, d) = (v(n00), v(n10), v(n01), v(n11));
-            let value = a * (1.0 - fx) * (1.0 - fy)
-                + b * fx * (1.0 - fy)
-                + c * (1.0 - fx) * fy
-                + d * fx * fy;
-            let d_dx = ((b - a) * (1.0 - fy) + (d - c) * fy) * dgx;
-            let d_dy = ((c - a) * (1.0 - fx) + (d - b) * fx) * dgy;
-            (value, d_dx, d_dy)
-        };
-        let (df, dfx, dfy) = lerp(&|n| n.deviation[0]);
-        let (dt, dtx, dty) = lerp(&|n| n.deviation[1]);
-        let sf = lerp(&|n| n.ln_sigma[0]).0.exp();
-        let st = lerp(&|n| n.ln_sigma[1]).0.exp();
-        let r = lerp(&|n| n.correlation).0;
-        let snr = lerp(&|n| n.ln_snr).0.exp();
+        Cell {
+            corners: [q(0, 0), q(1, 0), q(0, 1), q(1, 1)],
+            fx,
+            fy,
+            dgx,
+            dgy,
+        }
+    }
+
+    /// Features, Jacobian and bound at `(x, y) = (ln R, ln u)` (bilinear between grid points,
+    /// clamped to the box: outside it the deviation and the noise of its edge).
+    pub fn at(&self, x: f64, y: f64) -> LocalFeatures {
+        let cell = self.cell(x, y);
+        let (df, dfx, dfy) = cell.lerp(|n| n.deviation[0]);
+        let (dt, dtx, dty) = cell.lerp(|n| n.deviation[1]);
+        let sf = cell.lerp(|n| n.ln_sigma[0]).0.exp();
+        let st = cell.lerp(|n| n.ln_sigma[1]).0.exp();
+        let r = cell.lerp(|n| n.correlation).0;
         let (hf, ht) = self.model.forward(x, y);
         LocalFeatures {
             features: [hf + df, ht + dt],
             jacobian: [[2.0 + dfx, 1.2 + dfy], [1.0 + dtx, -0.2 + dty]],
             covariance: [sf * sf, st * st, r * sf * st],
-            detection: phi(snr - self.detection_sigmas),
         }
+    }
+
+    /// The probability that a pulse at `(x, y) = (ln R, ln u)` is found at all,
+    /// `Phi(d - eta)`: `d` the matched filter's signal-to-noise ratio (bilinear in `ln d`
+    /// between grid points), `eta` the map's [`ClassMap::detection_sigmas`]. Apart from
+    /// [`ClassMap::at`], which the preimage's Newton steps call, since only the draws need it.
+    pub fn detection(&self, x: f64, y: f64) -> f64 {
+        let snr = self.cell(x, y).lerp(|n| n.ln_snr).0.exp();
+        phi(snr - self.detection_sigmas)
     }
 
     /// `z* = g^-1(f)` by Newton's method from the Hertz inverse (see the module docs), each
@@ -701,7 +733,7 @@ struct ClassDraws {
 /// `n` draws of class `i` of `maps` from `uniform`, each decided on its features with the
 /// bound's correlated Gaussian noise ([`decide_with_posterior`], confident at
 /// `confidence_threshold`), weighted by the probability that its pulse is found
-/// ([`LocalFeatures::detection`]: a pulse not found is decided neither right nor wrong, as a
+/// ([`ClassMap::detection`]: a pulse not found is decided neither right nor wrong, as a
 /// missed impact is scored), and without noise ([`decide`]); each draw's `sigma ln F` and
 /// `sigma ln t` are added to `sums`, in draw order.
 fn draw_class(
@@ -734,7 +766,7 @@ fn draw_class(
             f[1] + st * (r * g1 + (1.0 - r * r).max(0.0).sqrt() * g2),
         ];
         let (class, posterior) = decide_with_posterior(maps, noisy);
-        let found = l.detection;
+        let found = m.detection(x, y);
         d.detected += found;
         d.right += found * f64::from(u8::from(class == i));
         if posterior >= confidence_threshold {
