@@ -33,6 +33,10 @@ pub struct Measurement {
     /// because the noise lifted it over the trigger, and that noise is in its measurement:
     /// such a pulse gets no `Class` verdict (see [`Scene::classify`]).
     pub trigger_margin: f32,
+    /// Measured from its clipped flanks with its contact's shape (the detector's flank fit):
+    /// its peak and duration are then the continuous pulse's, which the scene's sampling
+    /// corrections (of a fit through the top's samples) do not apply to.
+    pub from_flanks: bool,
 }
 
 /// The least [`Measurement::trigger_margin`] of a `Class` verdict: 3 standard deviations. A
@@ -48,8 +52,8 @@ pub const TRIGGER_MARGIN: f32 = 3.0;
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum RejectReason {
     /// A sample reached the ADC's full scale, and the pulse could not be measured from its
-    /// unclipped flanks (too few left, a damped contact, a chain, or a fit that does not
-    /// describe it), or a flat top clipped below full scale.
+    /// unclipped flanks (too few left, a contact whose shape the scene does not carry, a
+    /// chain, or a fit that does not describe it), or a flat top clipped below full scale.
     Saturated,
     /// One sample stands alone above the threshold (EMI spike, not an impact).
     Spike,
@@ -259,7 +263,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
-    ///                       trigger_margin: f32::INFINITY };
+    ///                       trigger_margin: f32::INFINITY, from_flanks: false };
     /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
@@ -407,7 +411,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
-    ///                       trigger_margin: f32::INFINITY };
+    ///                       trigger_margin: f32::INFINITY, from_flanks: false };
     /// let (x, y, noise) = scene.located(0, &m).unwrap();
     /// let inv = scene.invert(0, &m).unwrap();
     /// assert!((x.exp() / inv.radius_m - 1.0).abs() < 1e-5);
@@ -463,7 +467,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// it is read); the identity for an undamped elastic contact.
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
-        if !self.settings().corrects_sampling() {
+        if m.from_flanks || !self.settings().corrects_sampling() {
             return Measurement {
                 peak_force_n: m.peak_force_n / c.force_ratio,
                 duration_s: m.duration_s / c.duration_ratio,
@@ -509,6 +513,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             cov_ln: cov - sf * sf,
             asymmetry: m.asymmetry,
             trigger_margin: m.trigger_margin,
+            from_flanks: m.from_flanks,
         }
     }
 }

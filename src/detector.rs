@@ -35,10 +35,13 @@
 //!   `max(3, n / 20)` (times `Settings::flat_top_ratio` for a contact with a broader top) or
 //!   more consecutive samples equal to the pulse's largest one, on a sensor with at least one
 //!   count of noise, is a clipped top: `Saturated`.
-//! - Clipped at the ADC's full scale: the two samples before the first clipped one and the two
-//!   after the last give `F_max` and `t_c` by the least-squares fit of the Hertz shape to
-//!   them ([`flank_fit`], `Detector::measure_clipped`), with their sigmas from the fit; a
-//!   pulse whose flanks are too short or that the fit does not describe stays `Saturated`.
+//! - Clipped at the ADC's full scale (on a rigid chain): the two samples before the first
+//!   clipped one and the two after the last give `F_max` and `t_c` by the least-squares fit
+//!   of the Hertz shape to them ([`flank_fit`], `Detector::measure_clipped`), or of a damped
+//!   contact's own tabulated shape (`Settings::pulse_shape`,
+//!   `crate::pulse_shape::shape_flank_fit`), with their sigmas from the fit; a pulse whose
+//!   flanks are too short, whose contact's shape the scene does not carry, or that the fit
+//!   does not describe stays `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the level a sample above it must pass to
@@ -67,13 +70,15 @@
 use crate::classifier::{Measurement, RejectReason};
 use crate::equaliser::Pairs;
 use crate::math::{Backend, DefaultBackend};
+#[cfg(feature = "pulse_shape")]
+use crate::pulse_shape::{PulseShape, SHAPE_ERROR, shape_flank_fit};
 use crate::scene::{ContactCalibration, Scene};
 
 /// Samples kept before the trigger and added to the pulse.
 pub const PRE_TRIGGER: usize = 32;
 
 pub use crate::shape_fit::{
-    C_AREA, C_ENERGY, FlankFit, PEAK_OMEGA, PeakFit, flank_fit, peak_fit, shape_fit,
+    C_AREA, C_ENERGY, FlankFit, Flanks, PEAK_OMEGA, PeakFit, flank_fit, peak_fit, shape_fit,
 };
 
 pub use crate::scene::MIN_DURATION_SAMPLES;
@@ -396,6 +401,10 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// spread states the fit's error at few samples per pulse: a measurement then
     /// states its sigmas without the fit's generic bound ([`Detector::stated_sigmas`]).
     sampling_calibrated: bool,
+    /// The damped contact's own pulse shape, from which a clipped pulse is measured
+    /// (`Settings::pulse_shape`, feature `pulse_shape`).
+    #[cfg(feature = "pulse_shape")]
+    pulse_shape: PulseShape,
     hold: u16,
     max_samples: u32,
     alpha: f32,
@@ -470,6 +479,12 @@ impl<M: Backend> Detector<M> {
             spike_fraction: s.spike_fraction,
             hertz: s.contact == ContactCalibration::HERTZ && plain_top(s),
             sampling_calibrated: s.corrects_sampling(),
+            #[cfg(feature = "pulse_shape")]
+            pulse_shape: if plain_top(s) {
+                s.pulse_shape
+            } else {
+                PulseShape::NONE
+            },
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -1096,6 +1111,7 @@ impl<M: Backend> Detector<M> {
                 cov_ln: sigmas.shared - sigma_ln_force * sigma_ln_force,
                 asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
                 trigger_margin: (peak - p.trigger) / (self.noise * M::sqrt(gain2)),
+                from_flanks: false,
             }),
         }
     }
@@ -1312,11 +1328,13 @@ impl<M: Backend> Detector<M> {
         q > 0.0 && M::ln(q).abs() <= self.shape_tolerance + 4.0 * sigma_q
     }
 
-    /// A pulse with samples at the ADC's full scale, measured from its unclipped flanks
-    /// ([`flank_fit`]) when the clipped samples are one run at the top of an undamped
-    /// pulse on a rigid chain, with two samples either side of the run; otherwise `Saturated`.
-    /// Its sigmas are the fit's, from the noise and the four samples; the shape and skewness
-    /// checks, which a clipped top fails, are not made.
+    /// A pulse with samples at the ADC's full scale, measured from its unclipped flanks when
+    /// the clipped samples are one run at its top, on a rigid chain, with two samples either
+    /// side of the run: an undamped pulse by the Hertz shape ([`flank_fit`]), a damped one by
+    /// the contact's own (`Settings::pulse_shape`, [`shape_flank_fit`]); otherwise, or when
+    /// the fit does not describe the flanks, `Saturated`. Its sigmas are the fit's, from the
+    /// noise and the four samples; the shape and skewness checks, which a clipped top fails,
+    /// are not made.
     #[cold]
     #[inline(never)]
     fn measure_clipped(&self) -> Detection {
@@ -1327,22 +1345,13 @@ impl<M: Backend> Detector<M> {
             outcome: Err(RejectReason::Saturated),
         };
         let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
-        let plain = self.ring_weight <= 0.0 && self.hertz;
-        if !(whole && plain && p.after_clip_count >= 2 && p.clipped == p.flat) {
+        if !(whole && self.ring_weight <= 0.0 && p.after_clip_count >= 2 && p.clipped == p.flat) {
             return reject;
         }
-        let Some(fit) = flank_fit(
-            p.before_max,
-            p.clipped as f32,
-            p.after_clip,
-            p.max,
-            p.sum,
-            self.noise,
-        ) else {
+        let run = p.clipped as f32;
+        let Some((fit, noise2, floor2)) = self.fit_flanks(run) else {
             return reject;
         };
-        // The template's own error (the series, 1e-4 of `g` at the reach) beside the noise.
-        let (noise2, floor2) = (self.noise * self.noise, FLANK_FLOOR * FLANK_FLOOR);
         let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
         Detection::Pulse {
             at_sample,
@@ -1354,8 +1363,38 @@ impl<M: Backend> Detector<M> {
                 cov_ln: cov,
                 asymmetry: 0.0,
                 trigger_margin: f32::INFINITY,
+                from_flanks: true,
             }),
         }
+    }
+
+    /// The flank fit of a clipped run of `run` samples, the variance per sample its gains
+    /// take (counts^2) and its template's own error (log units squared): for an undamped
+    /// contact, the noise's and the Hertz series' [`FLANK_FLOOR`]^2; for a damped one with a
+    /// [`PulseShape`], the noise's with the table's [`SHAPE_ERROR`] of the peak per sample,
+    /// and no floor. `None` for any other contact, or when the fit fails.
+    fn fit_flanks(&self, run: f32) -> Option<(FlankFit, f32, f32)> {
+        let p = &self.pulse;
+        let flanks = Flanks {
+            before: p.before_max,
+            run,
+            after: p.after_clip,
+            level: p.max,
+            sum: p.sum,
+        };
+        let noise2 = self.noise * self.noise;
+        if self.hertz {
+            let fit = flank_fit(&flanks, self.noise)?;
+            return Some((fit, noise2, FLANK_FLOOR * FLANK_FLOOR));
+        }
+        #[cfg(feature = "pulse_shape")]
+        if self.pulse_shape.is_some() {
+            let shape = &self.pulse_shape;
+            let fit = shape_flank_fit(&flanks, self.noise, shape)?;
+            let table = SHAPE_ERROR * fit.peak;
+            return Some((fit, noise2 + table * table, 0.0));
+        }
+        None
     }
 }
 

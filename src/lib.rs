@@ -24,6 +24,8 @@ pub mod hertz;
 pub mod material;
 pub mod math;
 pub mod monitor;
+#[cfg(feature = "pulse_shape")]
+pub mod pulse_shape;
 pub mod ratio_map;
 pub mod sampled;
 pub mod sampled_phase;
@@ -46,6 +48,8 @@ pub use error::Error;
 pub use flow::{FlowConfig, FlowMonitor, FlowSlot, FlowStatus, NoFlow};
 pub use material::Material;
 pub use monitor::{Event, Monitor, Report};
+#[cfg(feature = "pulse_shape")]
+pub use scene::PulseShape;
 pub use scene::{
     ContactCalibration, ParticleClass, SampledCalibration, SampledPhase, Scene, SensorChain,
     Settings, Speed,

@@ -11,6 +11,8 @@ use crate::error::{Error, positive, representable};
 use crate::hertz;
 use crate::material::{Material, effective_modulus_pa};
 use crate::math::{Backend, DefaultBackend};
+#[cfg(feature = "pulse_shape")]
+pub use crate::pulse_shape::PulseShape;
 use crate::ratio_map::RatioMap;
 pub use crate::sampled::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
 pub use crate::sampled_phase::SampledPhase;
@@ -223,6 +225,12 @@ pub struct Settings {
     /// the scene adds nothing to it. With the `sampled_phase` feature only.
     #[cfg(feature = "sampled_phase")]
     pub sampled_phase: SampledPhase,
+    /// A damped contact's own pulse shape, from which the detector measures a pulse clipped
+    /// at the ADC's full scale on a rigid chain ([`PulseShape::NONE`]: none, and such a pulse
+    /// is `Saturated`; an undamped contact's is the Hertz shape, built in). With the
+    /// `pulse_shape` feature only.
+    #[cfg(feature = "pulse_shape")]
+    pub pulse_shape: PulseShape,
 }
 
 /// A damped contact against the undamped Hertz model, as the detector measures it: the ratios
@@ -299,6 +307,8 @@ impl Default for Settings {
             flat_top_ratio: 1.0,
             #[cfg(feature = "sampled_phase")]
             sampled_phase: SampledPhase::NONE,
+            #[cfg(feature = "pulse_shape")]
+            pulse_shape: PulseShape::NONE,
         }
     }
 }
@@ -342,6 +352,8 @@ impl Settings {
         self.contact.check()?;
         #[cfg(feature = "sampled_phase")]
         self.sampled_phase.check()?;
+        #[cfg(feature = "pulse_shape")]
+        self.pulse_shape.check()?;
         if !(self.spike_fraction.is_finite() && self.spike_fraction > 0.0) {
             return Err(Error::OutOfRange("spike_fraction"));
         }

@@ -258,22 +258,39 @@ fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32
 /// [`normal_equations`]); `None` when `N` is singular.
 #[inline(never)]
 fn gauss_newton(ks: &[f32], ys: &[f32], p: [f32; 3]) -> Option<([f32; 3], Matrix3, [f32; 3])> {
-    let (n, b, c) = normal_equations(ks, ys, p);
+    gauss_newton_of(ks, ys, p, peak_shape)
+}
+
+/// [`gauss_newton`] with the template `shape(x) = (g, dg/dx)` in place of [`peak_shape`].
+pub(crate) fn gauss_newton_of(
+    ks: &[f32],
+    ys: &[f32],
+    p: [f32; 3],
+    shape: impl Fn(f32) -> (f32, f32),
+) -> Option<([f32; 3], Matrix3, [f32; 3])> {
+    let (n, b, c) = normal_equations(ks, ys, p, shape);
     let inv = inverse3(&n)?;
     let step = inv.map(|row| row[0] * b[0] + row[1] * b[1] + row[2] * b[2]);
     Some(([p[0] + step[0], p[1] + step[1], p[2] + step[2]], inv, c))
 }
 
-/// The Gauss-Newton normal equations of `F_max g(d (k - k_peak))` ([`peak_shape`]) at
+/// The Gauss-Newton normal equations of `F_max g(d (k - k_peak))` (the template `shape(x) =
+/// (g, dg/dx)`: [`peak_shape`], or a damped contact's tabulated pulse with `k_peak` the
+/// contact's start, `crate::pulse_shape::shape_flank_fit`) at
 /// `p = [F_max, k_peak, d]` over the samples `ys` at `ks` (samples; `t = k - k_peak`):
 /// `[n11, n12, n13, n22, n23, n33]`, the right side `b` and the column sums `c` of the
 /// columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'` and `dm/dd = F_max t g'`.
-fn normal_equations(ks: &[f32], ys: &[f32], p: [f32; 3]) -> ([f32; 6], [f32; 3], [f32; 3]) {
+fn normal_equations(
+    ks: &[f32],
+    ys: &[f32],
+    p: [f32; 3],
+    shape: impl Fn(f32) -> (f32, f32),
+) -> ([f32; 6], [f32; 3], [f32; 3]) {
     let [peak, at, d] = p;
     let (mut n, mut b, mut c) = ([0.0f32; 6], [0.0f32; 3], [0.0f32; 3]);
     for (&k, &y) in ks.iter().zip(ys) {
         let t = k - at;
-        let (g, slope) = peak_shape(d * t);
+        let (g, slope) = shape(d * t);
         let (j1, j2, j3) = (g, -peak * d * slope, peak * t * slope);
         let r = y - peak * g;
         n = [
@@ -291,7 +308,7 @@ fn normal_equations(ks: &[f32], ys: &[f32], p: [f32; 3]) -> ([f32; 6], [f32; 3],
 }
 
 /// A 3 x 3 matrix, by rows.
-type Matrix3 = [[f32; 3]; 3];
+pub(crate) type Matrix3 = [[f32; 3]; 3];
 
 /// The inverse of the symmetric 3 x 3 matrix `[[a, b, c], [b, e, f], [c, f, i]]`, given as
 /// `[a, b, c, e, f, i]`, by its cofactors; `None` when it is singular to within f32
@@ -313,6 +330,44 @@ fn inverse3(&[a, b, c, e, f, i]: &[f32; 6]) -> Option<Matrix3> {
 /// within 2e-5 of `g` there (`g(1.3) = 0.170`).
 pub const FLANK_REACH: f32 = 1.3;
 
+/// A pulse clipped at the ADC's full scale as the flank fits read it ([`flank_fit`],
+/// `crate::pulse_shape::shape_flank_fit`): the two samples before the first clipped one (at
+/// `k = -2, -1`), the two after the last (`k = run, run + 1`), the clipped samples, the
+/// clipping level and the sum of all the pulse's samples (counts above the baseline).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Flanks {
+    /// The samples at `k = -2, -1` (counts).
+    pub before: [f32; 2],
+    /// Clipped samples, `k = 0 .. run - 1` (at least 1).
+    pub run: f32,
+    /// The samples at `k = run, run + 1` (counts).
+    pub after: [f32; 2],
+    /// The clipping level (counts).
+    pub level: f32,
+    /// Sum of all the pulse's samples (counts).
+    pub sum: f32,
+}
+
+impl Flanks {
+    /// The four samples' positions `k` and values, `None` unless the level and the sum are
+    /// finite and positive and at least one sample is clipped.
+    ///
+    /// ```
+    /// use coalshock::shape_fit::Flanks;
+    /// let f = Flanks { before: [1.0, 2.0], run: 3.0, after: [2.5, 1.5], level: 3.0, sum: 16.0 };
+    /// assert_eq!(f.samples(), Some(([-2.0, -1.0, 3.0, 4.0], [1.0, 2.0, 2.5, 1.5])));
+    /// assert_eq!(Flanks { run: 0.0, ..f }.samples(), None);
+    /// ```
+    pub fn samples(&self) -> Option<([f32; 4], [f32; 4])> {
+        let (level, sum, run) = (self.level, self.sum, self.run);
+        if !(level > 0.0 && sum > 0.0 && run >= 1.0 && level.is_finite() && sum.is_finite()) {
+            return None;
+        }
+        let ([b0, b1], [a0, a1]) = (self.before, self.after);
+        Some(([-2.0, -1.0, run, run + 1.0], [b0, b1, a0, a1]))
+    }
+}
+
 /// What [`flank_fit`] reads from a clipped pulse: peak (counts), duration (samples), and the
 /// covariance of `(ln F_max, ln t_c)` over one sample's noise variance.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -325,9 +380,9 @@ pub struct FlankFit {
     pub gains: [f32; 3],
 }
 
-/// Peak and duration of a pulse whose top is clipped, from its unclipped flanks: the two
-/// samples before the first clipped one (at `k = -2, -1`), the two after the last (`k = run,
-/// run + 1`, `run` clipped samples), the clipping `level` and the sum of all samples. The
+/// Peak and duration of a Hertz pulse whose top is clipped, from its unclipped flanks
+/// ([`Flanks`]: the two samples either side of the `run` clipped ones, the clipping `level`
+/// and the sum of all samples). The
 /// least-squares fit of `F_max g(d (k - k_peak))` ([`peak_shape`]) to the four, in `F_max`,
 /// `k_peak` and the phase step `d` (six Gauss-Newton steps from `k_peak` at the clipped run's
 /// middle, `d` from the area over the level, `F_max` through the nearer flank samples), gives
@@ -336,19 +391,15 @@ pub struct FlankFit {
 /// clipped run, the fitted pulse below the level (less four `noise` RMS) at the run's ends,
 /// or the four samples' residual above `4 noise` RMS (with `1e-4 F_max` for the template).
 #[inline(never)]
-pub fn flank_fit(
-    before: [f32; 2],
-    run: f32,
-    after: [f32; 2],
-    level: f32,
-    sum: f32,
-    noise: f32,
-) -> Option<FlankFit> {
-    if !(level > 0.0 && sum > 0.0 && run >= 1.0 && level.is_finite() && sum.is_finite()) {
-        return None;
-    }
-    let ks = [-2.0, -1.0, run, run + 1.0];
-    let ys = [before[0], before[1], after[0], after[1]];
+pub fn flank_fit(flanks: &Flanks, noise: f32) -> Option<FlankFit> {
+    let (ks, ys) = flanks.samples()?;
+    let Flanks {
+        before,
+        run,
+        after,
+        level,
+        sum,
+    } = *flanks;
     let d0 = step(sum / (C_AREA * level));
     let half = 0.5 * (run + 1.0);
     let near = 0.5 * (before[1] + after[0]);
@@ -374,17 +425,22 @@ pub fn flank_fit(
     if !(inside && reach <= FLANK_REACH && edge >= level - 4.0 * noise && rss <= 4.0 * tolerance) {
         return None;
     }
-    // ln t_c = ln PEAK_OMEGA - ln d.
-    let gains = [
-        inv[0][0] / (peak * peak),
-        inv[2][2] / (d * d),
-        -inv[0][2] / (peak * d),
-    ];
     Some(FlankFit {
         peak,
         duration: PEAK_OMEGA / d,
-        gains,
+        gains: flank_gains(&inv, peak, d),
     })
+}
+
+/// `[var ln F_max, var ln t_c, cov]` over one sample's noise variance of a flank fit in
+/// `[F_max, k_peak, d]` whose duration is `t_c = const / d` (`ln t_c = const - ln d`), from
+/// the inverse `inv` of its normal equations: `inv_FF / F^2`, `inv_dd / d^2`, `-inv_Fd / (F d)`.
+pub(crate) fn flank_gains(inv: &Matrix3, peak: f32, d: f32) -> [f32; 3] {
+    [
+        inv[0][0] / (peak * peak),
+        inv[2][2] / (d * d),
+        -inv[0][2] / (peak * d),
+    ]
 }
 
 /// One Gauss-Newton step of [`flank_fit`] over the samples `ys` at `ks` ([`gauss_newton`]),

@@ -94,6 +94,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
             cov_ln: 0.0,
             asymmetry: 0.0,
             trigger_margin: f32::INFINITY,
+            from_flanks: false,
         };
         let (v, lls) = scene.classify_with_likelihoods(&m);
         assert_eq!(v, scene.classify(&m));
@@ -107,6 +108,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
         cov_ln: 0.0,
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
+        from_flanks: false,
     };
     assert_eq!(scene.classify_with_likelihoods(&bad).1, None);
 }

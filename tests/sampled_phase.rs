@@ -117,6 +117,7 @@ fn the_duration_noise_moves_the_sampling_correction_and_is_stated() {
         cov_ln: c,
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
+        from_flanks: false,
     };
     let stated = scene.hertz_equivalent(&m);
     let mut rng = common::Rng::new(0x51A7_E5EE_D5EE_D001);

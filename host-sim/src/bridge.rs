@@ -7,6 +7,7 @@ pub mod calibrate;
 pub mod convert;
 pub mod equalised_fit;
 pub mod kernel_scene;
+pub mod pulse_shape;
 pub mod ratio_table;
 pub mod sampled_fit;
 pub mod sampled_phase;

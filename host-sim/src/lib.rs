@@ -26,8 +26,8 @@ pub mod score;
 pub mod sim;
 
 pub use bridge::{
-    calibrate, convert, equalised_fit, kernel_scene, ratio_table, sampled_fit, sampled_phase,
-    skew_tolerance, skewness,
+    calibrate, convert, equalised_fit, kernel_scene, pulse_shape, ratio_table, sampled_fit,
+    sampled_phase, skew_tolerance, skewness,
 };
 pub use cli::{
     caving_cli, evaluate_cli, export_cli, impact_cli, paper_cli, plasticity_cli, speed_cli,

@@ -19,10 +19,12 @@
 //! reported spread shows: such a scene's force and duration ratios are carried per class by
 //! [`crate::bridge::ratio_table`] instead.
 
+use coalshock::PulseShape;
 use coalshock::sampled_phase::PHASE_FIRST_N;
 use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 
 use crate::bridge::equalised_fit::EqualisedChain;
+use crate::bridge::pulse_shape::scene_shape;
 use crate::bridge::sampled_fit::force_at;
 pub use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
 use crate::bridge::sampled_phase::{Phase64, phase_calibration};
@@ -155,6 +157,11 @@ pub struct Calibration64 {
     /// ([`hertz_top_fraction`]): how much broader the contact's own top is (about 2-3 for a
     /// yielding pulse). The kernel's `Settings::flat_top_ratio` for a scene that yields.
     pub flat_top_ratio: f64,
+    /// A damped, self-similar contact's pulse shape for the kernel's flank fit of a clipped
+    /// pulse, with the largest error of any impact's pulse against it
+    /// ([`scene_shape`]); `None` for a law that is not self-similar, a yielding class, or a
+    /// scene whose impacts stray from the table by more than the kernel's `SHAPE_ERROR`.
+    pub pulse_shape: Option<(PulseShape, f64)>,
 }
 
 /// The fraction of its contact time a Hertz pulse spends within 2 % of its peak:
@@ -372,6 +379,9 @@ pub fn calibrate(
     } = integrate_grid(scene)?;
     let fs = scene.sensor.sample_rate_hz;
     let damped = scene.contact != LawSpec::Hertz;
+    let pulse_shape = (damped && !scene.yields())
+        .then(|| scene_shape(scene.contact, all.iter().map(|(_, s)| s.as_slice())))
+        .flatten();
     let sampled_fit = (shortest_s * fs < SMOOTH_FROM_SAMPLES)
         .then(|| sampled_of_grid(&all, &pulses, damped, chain));
     let (sampled_fit, phase) = sampled_fit.map_or((None, None), |(s, p)| (Some(s), p));
@@ -409,6 +419,7 @@ pub fn calibrate(
         sampled: sampled_fit,
         phase,
         flat_top_ratio: (ln_top / n).exp(),
+        pulse_shape,
     }))
 }
 

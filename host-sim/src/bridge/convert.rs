@@ -4,6 +4,7 @@
 //! Every `f64 -> f32` cast rounds to nearest; the kernel then checks the values (a value
 //! beyond the f32 range becomes infinite and the kernel refuses it by name).
 
+use coalshock::PulseShape;
 use coalshock::math::Backend;
 use coalshock::ratio_map::RatioMap;
 use coalshock::sampled_phase::SampledPhase;
@@ -233,6 +234,9 @@ pub fn settings_to_kernel(
     s.sampled_phase = cal
         .and_then(|c| c.phase)
         .map_or(SampledPhase::NONE, |t| t.to_kernel());
+    s.pulse_shape = cal
+        .and_then(|c| c.pulse_shape)
+        .map_or(PulseShape::NONE, |(shape, _)| shape);
     if let Some(c) = cal {
         if s.shape_tolerance == d.shape_tolerance {
             let spread = c.spread_ln.shape + c.sampled_shape_spread;

@@ -18,7 +18,7 @@ use coalshock::ratio_map::RatioMap;
 use coalshock::sampled_phase::{PHASE_COLUMNS, PHASE_ROWS};
 use coalshock::{
     Accelerometer, BeamMode, ChainDynamics, ChainTolerance, ContactCalibration, Material,
-    ParticleClass, Range, SampledCalibration, SampledPhase, Settings, Speed,
+    ParticleClass, PulseShape, Range, SampledCalibration, SampledPhase, Settings, Speed,
 };
 
 use crate::bridge::convert::{
@@ -197,6 +197,21 @@ fn sampled_literal(s: &SampledCalibration) -> String {
     )
 }
 
+/// `pulse_shape: PulseShape { .. },` (a firmware that runs such a scene enables the kernel's
+/// `pulse_shape` feature), or nothing for [`PulseShape::NONE`].
+fn shape_field(p: &PulseShape) -> String {
+    if *p == PulseShape::NONE {
+        return String::new();
+    }
+    format!(
+        "        pulse_shape: PulseShape {{\n{}{}            area: {},\n            peak_at: {},\n        }},\n",
+        lit_array_field("values", &p.values, 12),
+        lit_array_field("slopes", &p.slopes, 12),
+        lit(p.area),
+        lit(p.peak_at),
+    )
+}
+
 /// `sampled_phase: SampledPhase { .. },` (a firmware that runs such a scene enables the kernel's
 /// `sampled_phase` feature), or nothing for [`SampledPhase::NONE`].
 fn phase_field(p: &SampledPhase) -> String {
@@ -239,6 +254,10 @@ fn settings(out: &mut String, s: &Settings) {
     if !phase.is_empty() {
         fields.push(phase);
     }
+    let shape = shape_field(&s.pulse_shape);
+    if !shape.is_empty() {
+        fields.push(shape);
+    }
     if fields.is_empty() {
         out.push_str("    let settings = Settings::default();\n");
     } else {
@@ -271,6 +290,7 @@ fn changed_fields(s: &Settings) -> Vec<String> {
         skew_tolerance,
         flat_top_ratio,
         sampled_phase: _,
+        pulse_shape: _,
     } = *s;
     let mut fields = Vec::new();
     let mut float = |name: &str, v: f32, default: f32| {
@@ -413,6 +433,9 @@ fn imports(out: &mut String, settings: &Settings, dynamics: &ChainDynamics, tabl
     }
     if settings.sampled_phase != SampledPhase::NONE {
         uses.push("SampledPhase");
+    }
+    if settings.pulse_shape != PulseShape::NONE {
+        uses.push("PulseShape");
     }
     uses.extend(["Range", "Scene", "SensorChain", "Settings", "Speed"]);
     if !dynamics.is_rigid() {
