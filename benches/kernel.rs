@@ -122,6 +122,7 @@ fn bench(c: &mut Criterion) {
         cov_ln: -4e-6,
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
+        #[cfg(feature = "pulse_shape")]
         from_flanks: false,
     };
     c.bench_function(&format!("{backend}/classify one measurement"), |b| {

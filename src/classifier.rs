@@ -35,7 +35,10 @@ pub struct Measurement {
     pub trigger_margin: f32,
     /// Measured from its clipped flanks with its contact's shape (the detector's flank fit):
     /// its peak and duration are then the continuous pulse's, which the scene's sampling
-    /// corrections (of a fit through the top's samples) do not apply to.
+    /// corrections (of a fit through the top's samples) do not apply to. With the
+    /// `pulse_shape` feature only (without it, only an undamped pulse, whose sampling needs
+    /// no correction, is measured from its flanks).
+    #[cfg(feature = "pulse_shape")]
     pub from_flanks: bool,
 }
 
@@ -263,7 +266,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
-    ///                       trigger_margin: f32::INFINITY, from_flanks: false };
+    ///                       trigger_margin: f32::INFINITY,
+    ///                       #[cfg(feature = "pulse_shape")] from_flanks: false };
     /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
@@ -411,7 +415,8 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// let m = Measurement { peak_force_n: 2000.0, duration_s: 1.2e-4,
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
-    ///                       trigger_margin: f32::INFINITY, from_flanks: false };
+    ///                       trigger_margin: f32::INFINITY,
+    ///                       #[cfg(feature = "pulse_shape")] from_flanks: false };
     /// let (x, y, noise) = scene.located(0, &m).unwrap();
     /// let inv = scene.invert(0, &m).unwrap();
     /// assert!((x.exp() / inv.radius_m - 1.0).abs() < 1e-5);
@@ -467,7 +472,11 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// it is read); the identity for an undamped elastic contact.
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
-        if m.from_flanks || !self.settings().corrects_sampling() {
+        #[cfg(feature = "pulse_shape")]
+        let from_flanks = m.from_flanks;
+        #[cfg(not(feature = "pulse_shape"))]
+        let from_flanks = false;
+        if from_flanks || !self.settings().corrects_sampling() {
             return Measurement {
                 peak_force_n: m.peak_force_n / c.force_ratio,
                 duration_s: m.duration_s / c.duration_ratio,
@@ -513,6 +522,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             cov_ln: cov - sf * sf,
             asymmetry: m.asymmetry,
             trigger_margin: m.trigger_margin,
+            #[cfg(feature = "pulse_shape")]
             from_flanks: m.from_flanks,
         }
     }

@@ -71,7 +71,7 @@ use crate::classifier::{Measurement, RejectReason};
 use crate::equaliser::Pairs;
 use crate::math::{Backend, DefaultBackend};
 #[cfg(feature = "pulse_shape")]
-use crate::pulse_shape::{PulseShape, SHAPE_ERROR, shape_flank_fit};
+use crate::pulse_shape::{PulseShape, shape_flank_fit};
 use crate::scene::{ContactCalibration, Scene};
 
 /// Samples kept before the trigger and added to the pulse.
@@ -401,8 +401,9 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// spread states the fit's error at few samples per pulse: a measurement then
     /// states its sigmas without the fit's generic bound ([`Detector::stated_sigmas`]).
     sampling_calibrated: bool,
-    /// The damped contact's own pulse shape, from which a clipped pulse is measured
-    /// (`Settings::pulse_shape`, feature `pulse_shape`).
+    /// The contact's own pulse shape, from which a clipped pulse is measured: the Hertz
+    /// pulse's ([`PulseShape::hertz`]) for an undamped contact, else `Settings::pulse_shape`
+    /// (feature `pulse_shape`).
     #[cfg(feature = "pulse_shape")]
     pulse_shape: PulseShape,
     hold: u16,
@@ -480,10 +481,10 @@ impl<M: Backend> Detector<M> {
             hertz: s.contact == ContactCalibration::HERTZ && plain_top(s),
             sampling_calibrated: s.corrects_sampling(),
             #[cfg(feature = "pulse_shape")]
-            pulse_shape: if plain_top(s) {
-                s.pulse_shape
-            } else {
-                PulseShape::NONE
+            pulse_shape: match (s.contact == ContactCalibration::HERTZ, plain_top(s)) {
+                (_, false) => PulseShape::NONE,
+                (true, true) => PulseShape::hertz(),
+                (false, true) => s.pulse_shape,
             },
             hold,
             max_samples,
@@ -1111,6 +1112,7 @@ impl<M: Backend> Detector<M> {
                 cov_ln: sigmas.shared - sigma_ln_force * sigma_ln_force,
                 asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
                 trigger_margin: (peak - p.trigger) / (self.noise * M::sqrt(gain2)),
+                #[cfg(feature = "pulse_shape")]
                 from_flanks: false,
             }),
         }
@@ -1363,6 +1365,7 @@ impl<M: Backend> Detector<M> {
                 cov_ln: cov,
                 asymmetry: 0.0,
                 trigger_margin: f32::INFINITY,
+                #[cfg(feature = "pulse_shape")]
                 from_flanks: true,
             }),
         }
@@ -1370,9 +1373,11 @@ impl<M: Backend> Detector<M> {
 
     /// The flank fit of a clipped run of `run` samples, the variance per sample its gains
     /// take (counts^2) and its template's own error (log units squared): for an undamped
-    /// contact, the noise's and the Hertz series' [`FLANK_FLOOR`]^2; for a damped one with a
-    /// [`PulseShape`], the noise's with the table's [`SHAPE_ERROR`] of the peak per sample,
-    /// and no floor. `None` for any other contact, or when the fit fails.
+    /// contact, the noise's and the Hertz series' [`FLANK_FLOOR`]^2; where that series does
+    /// not reach the flanks, or for a damped contact, with the contact's [`PulseShape`] (the
+    /// Hertz pulse's own, [`PulseShape::hertz`], or the scene's), the noise's with the table's
+    /// error at the four samples (`PulseShape::error`), and no floor. `None` for any other
+    /// contact, or when the fit fails.
     fn fit_flanks(&self, run: f32) -> Option<(FlankFit, f32, f32)> {
         let p = &self.pulse;
         let flanks = Flanks {
@@ -1384,14 +1389,14 @@ impl<M: Backend> Detector<M> {
         };
         let noise2 = self.noise * self.noise;
         if self.hertz {
-            let fit = flank_fit(&flanks, self.noise)?;
-            return Some((fit, noise2, FLANK_FLOOR * FLANK_FLOOR));
+            if let Some(fit) = flank_fit(&flanks, self.noise) {
+                return Some((fit, noise2, FLANK_FLOOR * FLANK_FLOOR));
+            }
         }
         #[cfg(feature = "pulse_shape")]
         if self.pulse_shape.is_some() {
             let shape = &self.pulse_shape;
-            let fit = shape_flank_fit(&flanks, self.noise, shape)?;
-            let table = SHAPE_ERROR * fit.peak;
+            let (fit, table) = shape_flank_fit(&flanks, self.noise, shape)?;
             return Some((fit, noise2 + table * table, 0.0));
         }
         None

@@ -74,6 +74,7 @@ fn a_tolerance_lowers_the_posterior_and_keeps_the_class() {
             cov_ln: -1e-4,
             asymmetry: 0.0,
             trigger_margin: f32::INFINITY,
+            #[cfg(feature = "pulse_shape")]
             from_flanks: false,
         };
         let (a, b) = (exact.classify(&m), known.classify(&m));

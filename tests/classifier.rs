@@ -22,6 +22,7 @@ fn exact(mat: Material, r: f64, u: f64) -> Measurement {
         cov_ln: 0.0,
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
+        #[cfg(feature = "pulse_shape")]
         from_flanks: false,
     }
 }
@@ -49,6 +50,7 @@ fn inversion_round_trip_over_the_scene() {
                     cov_ln: 0.0,
                     asymmetry: 0.0,
                     trigger_margin: f32::INFINITY,
+                    #[cfg(feature = "pulse_shape")]
                     from_flanks: false,
                 };
                 let inv = scene.invert(ci, &m).unwrap();
@@ -184,6 +186,7 @@ fn bad_measurements_are_rejected_not_panicking() {
             cov_ln: f32::NAN,
             asymmetry: 0.0,
             trigger_margin: f32::INFINITY,
+            #[cfg(feature = "pulse_shape")]
             from_flanks: false,
         };
         assert_eq!(
@@ -205,6 +208,7 @@ fn a_pulse_near_its_trigger_is_ambiguous() {
         sigma_ln_duration: 0.01,
         cov_ln: -1e-4,
         trigger_margin: coalshock::TRIGGER_MARGIN,
+        #[cfg(feature = "pulse_shape")]
         from_flanks: false,
         ..exact(Material::SANDSTONE, 0.03, 4.5)
     };
@@ -215,6 +219,7 @@ fn a_pulse_near_its_trigger_is_ambiguous() {
     for margin in [coalshock::TRIGGER_MARGIN - 1e-3, 0.0, -5.0, f32::NAN] {
         let near = Measurement {
             trigger_margin: margin,
+            #[cfg(feature = "pulse_shape")]
             from_flanks: false,
             ..clear
         };

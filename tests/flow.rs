@@ -94,6 +94,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
             cov_ln: 0.0,
             asymmetry: 0.0,
             trigger_margin: f32::INFINITY,
+            #[cfg(feature = "pulse_shape")]
             from_flanks: false,
         };
         let (v, lls) = scene.classify_with_likelihoods(&m);
@@ -108,6 +109,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
         cov_ln: 0.0,
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
+        #[cfg(feature = "pulse_shape")]
         from_flanks: false,
     };
     assert_eq!(scene.classify_with_likelihoods(&bad).1, None);

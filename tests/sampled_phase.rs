@@ -117,6 +117,7 @@ fn the_duration_noise_moves_the_sampling_correction_and_is_stated() {
         cov_ln: c,
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
+        #[cfg(feature = "pulse_shape")]
         from_flanks: false,
     };
     let stated = scene.hertz_equivalent(&m);

@@ -8,7 +8,7 @@ use coalshock::pulse_shape::{SHAPE_ERROR, shape_flank_fit};
 use coalshock::shape_fit::Flanks;
 use host_sim::impact::{ImpactSpec, simulate};
 use host_sim::law_spec::LawSpec;
-use host_sim::pulse_shape::{law_shape, shape_error};
+use host_sim::pulse_shape::{law_shape, scene_shape, shape_error};
 use host_sim::sampled_fit::force_at;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -41,25 +41,76 @@ fn impact(law: LawSpec, radius_m: f64, speed_m_s: f64) -> (Vec<(f64, f64)>, f64,
     (series, peak, area / (host_sim::calibrate::C_AREA * peak))
 }
 
+/// The three impacts far apart (8 mm at 0.5 m/s to 80 mm at 6 m/s) that a law's table is
+/// held to.
+const SPREAD: [(f64, f64); 3] = [(0.008, 0.5), (0.03, 1.0), (0.08, 6.0)];
+
 /// Every self-similar damped law's table stays within the kernel's stated error of the
-/// integrated pulses of three impacts far apart (8 mm at 0.5 m/s to 80 mm at 6 m/s), as the
-/// kernel reads the table (f32, Hermite): the error the flank fit counts as noise.
+/// integrated pulses of three impacts far apart, as the kernel reads the table (f32,
+/// Hermite) between its end intervals: the error the flank fit counts as noise. The table
+/// reaches into an end interval only where those pulses stay within it there too (Tsuji's
+/// force starts like `u^(1/4)`: not its first).
 #[test]
 fn every_damped_law_stays_within_the_tables_stated_error() {
     for name in LAWS {
         for e in RESTITUTIONS {
             let law = LawSpec::restitution_law(name, e).unwrap();
             let shape = law_shape(law).unwrap();
-            for (r, u) in [(0.008, 0.5), (0.03, 1.0), (0.08, 6.0)] {
+            for (r, u) in SPREAD {
                 let (series, _, _) = impact(law, r, u);
                 let err = shape_error(&shape, &series).unwrap();
+                let inner = err.inner;
                 assert!(
-                    err <= f64::from(SHAPE_ERROR),
-                    "{name} e {e} R {r} u {u}: {err:.2e}"
+                    inner <= f64::from(SHAPE_ERROR),
+                    "{name} e {e} R {r} u {u}: {err:?}"
                 );
+            }
+            let (held, largest) = held_shape(law);
+            assert!(largest <= f64::from(SHAPE_ERROR));
+            println!(
+                "{name} e {e}: reach {:?}, largest error {largest:.1e}",
+                held.reach
+            );
+            if name == "tsuji" {
+                assert!(held.reach[0] > 0.0, "{name} e {e}: {:?}", held.reach);
             }
         }
     }
+}
+
+/// The kernel's own table of the Hertz pulse (`PulseShape::hertz`, from its equation of
+/// motion) stays within the stated error of the integrator's Hertz pulses over the whole
+/// contact, its end intervals too (its reach).
+#[test]
+fn the_kernels_hertz_table_matches_the_integrator() {
+    let shape = PulseShape::hertz();
+    assert_eq!(shape.reach, [0.0, 1.0]);
+    let [inner, ends] = shape.error.map(f64::from);
+    for (r, u) in SPREAD {
+        let (series, _, _) = impact(LawSpec::Hertz, r, u);
+        let e = shape_error(&shape, &series).unwrap();
+        println!("hertz R {r} u {u}: {e:?}");
+        assert!(
+            e.inner <= inner && e.first.max(e.last) <= ends,
+            "R {r} u {u}: {e:?}"
+        );
+    }
+}
+
+/// The table a scene of `law` carries: the kernel's own for Hertz, else as a scene of the
+/// impacts [`SPREAD`] carries it.
+fn table(law: LawSpec) -> PulseShape {
+    if law == LawSpec::Hertz {
+        PulseShape::hertz()
+    } else {
+        held_shape(law).0
+    }
+}
+
+/// The table of `law` as a scene of the impacts [`SPREAD`] carries it (`scene_shape`).
+fn held_shape(law: LawSpec) -> (PulseShape, f64) {
+    let series: Vec<_> = SPREAD.iter().map(|&(r, u)| impact(law, r, u).0).collect();
+    scene_shape(law, series.iter().map(Vec::as_slice)).unwrap()
 }
 
 /// What the flank fit reads of one clipped pulse: `(ln F error, ln t_c error, stated sigma
@@ -97,10 +148,8 @@ fn read_clipped(
         level: LEVEL as f32,
         sum: ys.iter().sum::<f64>() as f32,
     };
-    let fit = shape_flank_fit(&flanks, noise as f32, shape)?;
-    let sigma2 = |g: f32| {
-        f64::from(g) * (noise * noise + (f64::from(SHAPE_ERROR) * f64::from(fit.peak)).powi(2))
-    };
+    let (fit, table) = shape_flank_fit(&flanks, noise as f32, shape)?;
+    let sigma2 = |g: f32| f64::from(g) * (noise * noise + f64::from(table).powi(2));
     Some((
         (f64::from(fit.peak) / (peak_n * counts_per_n)).ln(),
         (f64::from(fit.duration) * dt_s / duration_s).ln(),
@@ -109,20 +158,27 @@ fn read_clipped(
     ))
 }
 
-/// Clipped pulses of every self-similar damped law at 12, 30 and 100 samples per pulse, their
-/// peaks 1.02 to 2.5 times full scale, 16 sampling phases, 4 and 20 counts of noise: the flank
-/// fit measures at least 90 % of those of 30 samples or more, and where it measures, its
-/// errors against the integrated pulse's own peak and duration stay within its stated sigmas
-/// (root mean square of the z-scores at most 1, none beyond 4).
+/// Clipped pulses of the Hertz law (the kernel's own table) and every self-similar damped
+/// law at 12, 30 and 100 samples per pulse, their peaks 1.02 to 2.5 times full scale, 16
+/// sampling phases, 4 and 20 counts of noise: the flank fit measures at least 90 % of those
+/// of 30 samples or more, and where it measures, its errors against the integrated pulse's
+/// own peak and duration stay within its stated sigmas
+/// (root mean square of the z-scores within 0.3-1: the tables' stated errors are twice what
+/// the integrator shows; none beyond 4).
 #[test]
-fn clipped_damped_pulses_are_measured_within_their_stated_sigmas() {
+fn clipped_pulses_are_measured_within_their_stated_sigmas() {
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let (mut long, mut long_read) = (0usize, 0usize);
     let (mut z2, mut reads, mut worst) = (0.0f64, 0usize, 0.0f64);
-    for name in LAWS {
-        for e in RESTITUTIONS {
-            let law = LawSpec::restitution_law(name, e).unwrap();
-            let shape = law_shape(law).unwrap();
+    let hertz = std::iter::once(LawSpec::Hertz);
+    let damped = LAWS.iter().flat_map(|name| {
+        RESTITUTIONS
+            .iter()
+            .map(|&e| LawSpec::restitution_law(name, e).unwrap())
+    });
+    for law in hertz.chain(damped) {
+        {
+            let shape = table(law);
             let pulse = impact(law, 0.03, 1.0);
             for samples in [12.0, 30.0, 100.0] {
                 for over in [1.02, 1.2, 1.6, 2.5] {
@@ -157,5 +213,8 @@ fn clipped_damped_pulses_are_measured_within_their_stated_sigmas() {
     let rms = (z2 / reads as f64).sqrt();
     println!("measured {share:.3} of pulses of 30+ samples; rms z {rms:.2}, worst |z| {worst:.2}");
     assert!(share >= 0.9, "{share}");
-    assert!(rms <= 1.0 && worst <= 4.0, "rms z {rms}, worst {worst}");
+    assert!(
+        (0.3..=1.0).contains(&rms) && worst <= 4.0,
+        "rms z {rms}, worst {worst}"
+    );
 }
