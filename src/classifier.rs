@@ -466,6 +466,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// The impact of the kernel's own model (undamped Hertz, or Thornton's undamped yield for a
     /// class that states a yield pressure) a measurement stands for: `F_max / force_ratio` and
     /// `t_c / duration_ratio` of the scene's [`crate::ContactCalibration`], each also divided by
+    /// (except for a pulse measured from its clipped flanks, `Measurement::from_flanks`)
     /// the sampling correction at the pulse's samples per pulse (whose spread joins the
     /// measurement's sigmas, and where the phase table is read, the measurement's own noise
     /// carried through the table's slopes in `ln n`, since the measured duration picks where
