@@ -199,7 +199,8 @@ struct StreamArgs {
     /// Share of impacts that start less than one contact time after the previous one.
     #[arg(long, default_value_t = 0.0)]
     pileup_share: f64,
-    /// Share of impacts scaled to 1.5 x the ADC's full scale (rejected as saturated).
+    /// Share of impacts scaled to 1.5 x the ADC's full scale (measured from their flanks on a
+    /// rigid beam where the kernel can, else rejected as saturated).
     #[arg(long, default_value_t = 0.0)]
     saturate_share: f64,
     /// Share of impacts that lose samples near their peak (a recorded gap).

@@ -96,7 +96,8 @@ pub enum PulseModel {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FaultOptions {
     /// Per impact: scale the pulse so that its rigid peak reaches `saturate_overdrive` times
-    /// the ADC's full scale (the kernel should reject it as `Saturated`).
+    /// the ADC's full scale (on a rigid beam the kernel measures it from its flanks where it
+    /// can, else rejects it as `Saturated`).
     pub saturate_share: f64,
     /// Peak over full scale of a saturated impact (`> 1`).
     pub saturate_overdrive: f64,
