@@ -198,6 +198,8 @@ impl Bytes<'_> {
                 _ => 256,
             },
             sampled_phase: self.sampled_phase(),
+            // No damped table; settings with the Hertz contact fuzz the detector's own table.
+            pulse_shape: coalshock::PulseShape::NONE,
         }
     }
     /// No phase table half the time, else one whose axes and cells the bytes choose.
