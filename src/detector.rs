@@ -402,8 +402,8 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// states its sigmas without the fit's generic bound ([`Detector::stated_sigmas`]).
     sampling_calibrated: bool,
     /// The contact's own pulse shape, from which a clipped pulse is measured: the Hertz
-    /// pulse's ([`PulseShape::hertz`]) for an undamped contact, else `Settings::pulse_shape`
-    /// (feature `pulse_shape`).
+    /// pulse's ([`PulseShape::hertz`]) for an undamped contact, else `Settings::pulse_shape`;
+    /// none behind a chain that is not rigid ([`clip_shape`]; feature `pulse_shape`).
     #[cfg(feature = "pulse_shape")]
     pulse_shape: PulseShape,
     hold: u16,
@@ -460,7 +460,9 @@ impl<M: Backend> Detector<M> {
         // The equaliser colours and scales the ADC's white noise by its noise gain.
         let noise = sensor.noise_rms_counts * scene.equaliser().noise_gain();
         let adc_noisy = sensor.noise_rms_counts >= 1.0;
-        let (ring_weight, ring_decay) = Self::ring_weights(scene.equaliser().is_identity(), fs);
+        let rigid = scene.equaliser().is_identity();
+        let (ring_weight, ring_decay) = Self::ring_weights(rigid, fs);
+        let hertz = s.contact == ContactCalibration::HERTZ && plain_top(s);
         let modes = sensor.dynamics.modes();
         let mut ring_omegas = [0.0; crate::equaliser::MAX_MODES];
         for (w, mode) in ring_omegas.iter_mut().zip(modes) {
@@ -478,14 +480,10 @@ impl<M: Backend> Detector<M> {
             #[cfg(feature = "plasticity")]
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
-            hertz: s.contact == ContactCalibration::HERTZ && plain_top(s),
+            hertz,
             sampling_calibrated: s.corrects_sampling(),
             #[cfg(feature = "pulse_shape")]
-            pulse_shape: match (s.contact == ContactCalibration::HERTZ, plain_top(s)) {
-                (_, false) => PulseShape::NONE,
-                (true, true) => PulseShape::hertz(),
-                (false, true) => s.pulse_shape,
-            },
+            pulse_shape: clip_shape(s, hertz, rigid),
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -1335,8 +1333,8 @@ impl<M: Backend> Detector<M> {
     /// side of the run: an undamped pulse by the Hertz shape ([`flank_fit`]), a damped one by
     /// the contact's own (`Settings::pulse_shape`, [`shape_flank_fit`]); otherwise, or when
     /// the fit does not describe the flanks, `Saturated`. Its sigmas are the fit's, from the
-    /// noise and the four samples; the shape and skewness checks, which a clipped top fails,
-    /// are not made.
+    /// noise and the four samples (with the table's, the pulse's sum); the shape and skewness
+    /// checks, which a clipped top fails, are not made.
     #[cold]
     #[inline(never)]
     fn measure_clipped(&self) -> Detection {
@@ -1386,6 +1384,7 @@ impl<M: Backend> Detector<M> {
             after: p.after_clip,
             level: p.max,
             sum: p.sum,
+            samples: p.samples as f32,
         };
         let noise2 = self.noise * self.noise;
         if self.hertz {
@@ -1400,6 +1399,19 @@ impl<M: Backend> Detector<M> {
             return Some((fit, noise2 + table * table, 0.0));
         }
         None
+    }
+}
+
+/// The shape a clipped pulse is measured with (`Detector::measure_clipped`): the Hertz
+/// pulse's own table for the undamped Hertz contact (`hertz`), the scene's for another; none
+/// behind a chain that is not `rigid` (the flank fit is not reached there) or for a yielding
+/// top, so that the Hertz table's 1 024 steps are taken only where they are read.
+#[cfg(feature = "pulse_shape")]
+fn clip_shape(s: &crate::scene::Settings, hertz: bool, rigid: bool) -> PulseShape {
+    match (rigid && plain_top(s), hertz) {
+        (false, _) => PulseShape::NONE,
+        (true, true) => PulseShape::hertz(),
+        (true, false) => s.pulse_shape,
     }
 }
 

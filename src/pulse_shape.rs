@@ -11,7 +11,7 @@
 
 use crate::error::Error;
 use crate::hertz::CONTACT_TIME_FACTOR;
-use crate::shape_fit::{C_AREA, FlankFit, Flanks, Matrix3, flank_gains, gauss_newton_of};
+use crate::shape_fit::{C_AREA, FlankFit, Flanks, flank_gains, gauss_newton_of};
 
 /// Points of a [`PulseShape`] over `u = 0..=1`, `u_j = j / (SHAPE_POINTS - 1)`.
 pub const SHAPE_POINTS: usize = 65;
@@ -67,9 +67,10 @@ impl PulseShape {
     /// `delta_max` and `delta_max / u`: `z'' = -(5/4) z^(3/2)`, `z(0) = 0`, `z'(0) = 1`, over
     /// the contact time `2.9432752` ([`CONTACT_TIME_FACTOR`]), by classical Runge-Kutta with
     /// [`HERTZ_STEPS`] steps in libm's correctly rounded `sqrtf` whatever the backend (the
-    /// table is made once per detector, and its error is stated); `g = z^(3/2)` and `dg/du = (3/2) z^(1/2) z' t_c`. Its area is
-    /// [`C_AREA`], its peak at `u = 1/2`, its reach the whole contact (the force starts and
-    /// ends like `u^(3/2)`), its error [`HERTZ_TABLE_ERROR`]. The detector measures a clipped Hertz pulse with it where the
+    /// table is made once per detector, and its error is stated); `g = z^(3/2)` and
+    /// `dg/du = (3/2) z^(1/2) z' t_c`. Its area is [`C_AREA`], its peak at `u = 1/2`, its
+    /// reach the whole contact (the force starts and ends like `u^(3/2)`), its error
+    /// [`HERTZ_TABLE_ERROR`]. The detector measures a clipped Hertz pulse with it where the
     /// series about the top ([`crate::shape_fit::flank_fit`]) does not reach the flanks.
     ///
     /// ```
@@ -227,23 +228,28 @@ const STEPS: usize = 32;
 /// Halvings of a Gauss-Newton step that does not lower the residual, at most.
 const HALVINGS: usize = 6;
 
-/// Peak and duration of a damped pulse whose top is clipped, from its unclipped flanks
-/// ([`Flanks`]: the two samples either side of the `run` clipped ones, the clipping `level`
-/// and the sum of all samples) and the contact's own shape. The least-squares fit of `F_peak g(r (k - k_peak) + u_peak)` to the
-/// four (`u_peak` the table's `peak_at`), in `F_peak`, the peak's time `k_peak` and the inverse
-/// duration `r = 1 / t_c` (per sample; about the peak, a change of `r` leaves it in place):
-/// the best of `SCAN` durations between the four samples' span, `run + 3`, and twice the
-/// sum over `level x area`, each with its peak at `PLACES` places across the run and its
-/// least-squares `F_peak` (`scan_start`), then up to `STEPS` Gauss-Newton steps, each
-/// halved until it lowers the residual (`F_peak` kept above half its value, the peak within
-/// the run, `r` within the scan's range). The duration it reports is the detector's,
-/// `area t_c / C_AREA` (the area over `C_AREA F_peak`). `None` when the fit does not describe
-/// a clipped pulse of this shape: a flank sample inside the contact but outside the table's
-/// `reach`, `r` at the end of its range, the fitted pulse below the level (less
-/// four `noise` RMS) at the run's ends, or the four samples' residual above `8 x` their noise
-/// RMS (the sensor's `noise` with the table's error at them). With the fit, that error per
-/// sample (counts: [`PulseShape::error`] times `F_peak`), which the fit's sigmas take beside
-/// the noise.
+/// Samples of a contact the flank fit sums at most ([`shape_flank_fit`]'s fifth row); a
+/// longer one is not fitted.
+const SUM_SAMPLES: usize = 8192;
+
+/// Peak and duration of a pulse whose top is clipped, from its unclipped flanks ([`Flanks`]:
+/// the two samples either side of the `run` clipped ones, the clipping `level`, and the sum
+/// of the pulse's samples with their number) and the contact's own shape. The least-squares
+/// fit of `F_peak g(r (k - k_peak) + u_peak)` (`u_peak` the table's `peak_at`), in `F_peak`,
+/// the peak's time `k_peak` and the inverse duration `r = 1 / t_c` (per sample; about the
+/// peak, a change of `r` leaves it in place), to the four flank samples and, as a fifth row,
+/// to the sum of the pulse's other samples (the clipped ones read as the `level`), whose
+/// noise is its samples' and the table's error summed over them ([`ShapeFit::sum_sigma`]):
+/// where a flank sample sees no force, the sum still tests the fit. It starts from the best
+/// of `SCAN` durations between the four samples' span, `run + 3`, and twice the sum over
+/// `level x area`, each with its peak at `PLACES` places across the run ([`scan_start`]),
+/// then takes up to `STEPS` Gauss-Newton steps, each halved until it lowers the residual
+/// (`F_peak` kept above half its value, the peak within the run, the clipped samples inside
+/// the contact, `r` within the scan's range). The duration it reports is the
+/// detector's, `area t_c / C_AREA` (the area over `C_AREA F_peak`). `None` when the fit does
+/// not describe a clipped pulse of this shape ([`accepted`]). With the fit, the table's error
+/// per sample at the flanks (counts: [`PulseShape::error`] times `F_peak`), which the fit's
+/// sigmas take beside the noise.
 ///
 /// ```
 /// use coalshock::pulse_shape::{PulseShape, SHAPE_POINTS, SHAPE_STEP, shape_flank_fit};
@@ -273,6 +279,7 @@ const HALVINGS: usize = 6;
 ///     after: [at(run), at(run + 1.0)],
 ///     level: 2000.0,
 ///     sum: clipped.iter().sum(),
+///     samples: clipped.len() as f32,
 /// };
 /// let (fit, _) = shape_flank_fit(&flanks, 1.0, &s).unwrap();
 /// assert!((fit.peak / 2400.0 - 1.0).abs() < 1e-3);
@@ -281,52 +288,56 @@ const HALVINGS: usize = 6;
 #[inline(never)]
 pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Option<(FlankFit, f32)> {
     let (ks, ys) = flanks.samples()?;
-    if !(shape.is_some() && noise.is_finite()) {
+    if !(shape.is_some() && noise.is_finite() && noise > 0.0) {
         return None;
     }
-    let Flanks {
-        run, level, sum, ..
-    } = *flanks;
-    let (r_lo, r_hi) = (shape.area * level / (2.0 * sum), 1.0 / (run + 3.0));
-    if r_lo.is_nan() || r_lo >= r_hi {
+    let (run, level) = (flanks.run, flanks.level);
+    let range = (shape.area * level / (2.0 * flanks.sum), 1.0 / (run + 3.0));
+    if range.0.is_nan() || range.0 >= range.1 {
         return None;
     }
-    // The pulse about its peak, `x = r (k - k_peak)`.
-    let g = |x: f32| shape.at(x + shape.peak_at);
-    let rss = |p: [f32; 3]| {
-        ks.iter().zip(&ys).fold(0.0f32, |a, (&k, &y)| {
-            let e = y - p[0] * g(p[2] * (k - p[1])).0;
-            a + e * e
-        })
+    let start = scan_start(&ks, &ys, run, range, shape)?;
+    let fit = ShapeFit {
+        ks,
+        ys,
+        rest: flanks.sum - ys.iter().sum::<f32>() - run * level,
+        rest_samples: flanks.samples - 4.0 - run,
+        run,
+        shape,
+        noise,
+        sum_weight: 0.0,
     };
     let keep = |[peak, at, r]: [f32; 3], floor: f32| {
+        let r = r.max(range.0).min(range.1);
+        // The clipped samples lie inside the contact: it starts before the first and ends
+        // after the last.
+        let (rise, fall) = (shape.peak_at / r, (1.0 - shape.peak_at) / r);
+        let at = at.max(-0.5).min(run - 0.5);
         [
             peak.max(floor),
-            at.max(-0.5).min(run - 0.5),
-            r.max(r_lo).min(r_hi),
+            at.min(rise - 0.01).max(run - 1.0 - fall + 0.01),
+            r,
         ]
     };
-    let mut p = scan_start(&ks, &ys, run, (r_lo, r_hi), shape)?;
-    let mut inv: Matrix3 = [[0.0; 3]; 3];
-    let mut best = rss(p);
+    let kept = keep(start, 0.0);
+    let fit = fit.weighted(kept)?;
+    let mut p = kept;
+    let mut best = fit.rss(p)?;
     for _ in 0..STEPS {
-        let (next, next_inv, _) = gauss_newton_of(&ks, &ys, p, g)?;
-        inv = next_inv;
+        let (next, _, _) = gauss_newton_of(&ks, &ys, p, fit.g(), &[fit.sum_row(p)?])?;
         // The Gauss-Newton step, halved until it lowers the residual (the steep rise of a
         // damped pulse can throw a full step off the pulse); none that does: converged.
         let mut scale = 1.0;
         let mut moved = false;
         for _ in 0..HALVINGS {
-            let [a, b, c] = p;
-            let [na, nb, nc] = next;
+            let ([a, b, c], [na, nb, nc]) = (p, next);
             let step = [
                 a + scale * (na - a),
                 b + scale * (nb - b),
                 c + scale * (nc - c),
             ];
             let q = keep(step, 0.5 * a);
-            let e = rss(q);
-            if e < best {
+            if let Some(e) = fit.rss(q).filter(|&e| e < best) {
                 (p, best, moved) = (q, e, true);
                 break;
             }
@@ -336,34 +347,186 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
             break;
         }
     }
+    accepted(&fit, p, best, level, range)
+}
+
+/// The fit at `p = [F_peak, k_peak, r]` when it describes a clipped pulse of the table's
+/// shape, with its sigmas from the normal equations at `p` ([`ShapeFit::weighted`]): `None`
+/// for a flank sample inside the contact but outside the table's `reach`, `r` at the end of
+/// its `range`, the fitted pulse below the `level` (less four noise RMS) at the run's ends,
+/// the residual `rss` of the five rows above `8 x` the four samples' noise RMS (the
+/// sensor's with the table's error at them), or fewer than four rows that see the pulse (a
+/// flank sample whose force is below its noise RMS does not: at the contact's start the fit
+/// sits on the kink between no force and the steep flank; a pulse that rises from no force
+/// past the level within one sample leaves three, and nothing would test the fit).
+fn accepted(
+    fit: &ShapeFit,
+    p: [f32; 3],
+    rss: f32,
+    level: f32,
+    (r_lo, r_hi): (f32, f32),
+) -> Option<(FlankFit, f32)> {
     let [peak, at, r] = p;
+    let shape = fit.shape;
     let start = at - shape.peak_at / r;
-    let model = |k: f32| peak * g(r * (k - at)).0;
-    let rss = best;
-    // Each flank sample outside the contact (the force 0) or within the table's reach; the
-    // table's error at them, the larger where one lies in an end interval.
+    // Each flank sample outside the contact (the force 0) or within the table's reach.
     let [reach_lo, reach_hi] = shape.reach;
-    let us = ks.map(|k| r * (k - start));
-    let inside = us
-        .iter()
-        .all(|&u| u <= 0.0 || u >= 1.0 || (reach_lo..=reach_hi).contains(&u));
-    let at_end = us
-        .iter()
-        .any(|&u| u > 0.0 && u < 1.0 && !(SHAPE_STEP..=1.0 - SHAPE_STEP).contains(&u));
-    let [inner, ends] = shape.error;
-    let table = if at_end { ends } else { inner } * peak;
+    let inside = fit.ks.iter().all(|&k| {
+        let u = r * (k - start);
+        u <= 0.0 || u >= 1.0 || (reach_lo..=reach_hi).contains(&u)
+    });
+    let table = fit.flank_table(p);
+    let noise = fit.noise;
     let sigma2 = noise * noise + table * table;
-    let edge = model(0.0).min(model(run - 1.0));
+    let edge = fit.model(p, 0.0).0.min(fit.model(p, fit.run - 1.0).0);
     let free = r > 1.001 * r_lo && r < 0.999 * r_hi;
-    if !(inside && free && edge >= level - 4.0 * noise && rss <= 64.0 * sigma2) {
+    if !(inside && free && edge >= level - 4.0 * libm::sqrtf(sigma2) && rss <= 64.0 * sigma2) {
         return None;
     }
+    // The sigmas from the normal equations at `p`, without a flank sample whose force is
+    // below its noise (the sensor's with the table's error): where the pulse starts (or
+    // ends) at it, the fit sits on the kink between no force and the pulse's steep flank,
+    // whose one-sided slope would claim a start time that sample does not pin.
+    let g = fit.g();
+    let sigma = libm::sqrtf(sigma2);
+    let felt = |x: f32| match g(x) {
+        (g, _) if peak * g < sigma => (0.0, 0.0),
+        read => read,
+    };
+    let row = fit.weighted(p)?.sum_row(p)?;
+    // Three unknowns: at least four rows that see the pulse, or the residual tests nothing.
+    let seen = fit
+        .ks
+        .iter()
+        .filter(|&&k| felt(r * (k - at)).0 > 0.0)
+        .count()
+        + usize::from(row[0] != 0.0);
+    if seen < 4 {
+        return None;
+    }
+    let (_, inv, _) = gauss_newton_of(&fit.ks, &fit.ys, p, felt, &[row])?;
     let fit = FlankFit {
         peak,
         duration: shape.area / (C_AREA * r),
         gains: flank_gains(&inv, peak, r),
     };
     Some((fit, table))
+}
+
+/// Whether `u` lies in the table's first or last interval, inside the contact.
+fn in_end_interval(u: f32) -> bool {
+    u > 0.0 && u < 1.0 && !(SHAPE_STEP..=1.0 - SHAPE_STEP).contains(&u)
+}
+
+/// What [`shape_flank_fit`] fits: the four flank samples `ys` at `ks`, the sum `rest` of the
+/// pulse's other `rest_samples` samples less its clipped run's `run x level` (counts), the
+/// contact's table, the sensor's noise RMS (counts) and the weight of the sum's row against
+/// one flank sample.
+#[derive(Clone, Copy)]
+struct ShapeFit<'a> {
+    ks: [f32; 4],
+    ys: [f32; 4],
+    rest: f32,
+    rest_samples: f32,
+    run: f32,
+    shape: &'a PulseShape,
+    noise: f32,
+    sum_weight: f32,
+}
+
+impl ShapeFit<'_> {
+    /// The table about its peak, `x = r (k - k_peak)`: `(g, dg/dx)`.
+    fn g(&self) -> impl Fn(f32) -> (f32, f32) + '_ {
+        |x| self.shape.at(x + self.shape.peak_at)
+    }
+
+    /// The table's error per flank sample at `p` (counts, [`PulseShape::error`] times
+    /// `F_peak`): the larger where one lies in an end interval.
+    fn flank_table(&self, [peak, at, r]: [f32; 3]) -> f32 {
+        let start = at - self.shape.peak_at / r;
+        let at_end = self.ks.iter().any(|&k| in_end_interval(r * (k - start)));
+        let [inner, ends] = self.shape.error;
+        (if at_end { ends } else { inner }) * peak
+    }
+
+    /// The fit with its sum row weighted at `p` against one flank sample: the flank sample's
+    /// noise (the sensor's with [`Self::flank_table`]) over the sum's ([`Self::sum_sigma`]).
+    fn weighted(&self, p: [f32; 3]) -> Option<Self> {
+        let table = self.flank_table(p);
+        let flank = libm::sqrtf(self.noise * self.noise + table * table);
+        Some(ShapeFit {
+            sum_weight: flank / self.sum_sigma(p)?,
+            ..*self
+        })
+    }
+
+    /// The model `F_peak g(r (k - k_peak) + u_peak)` at sample `k` and its gradient in
+    /// `p = [F_peak, k_peak, r]` (counts).
+    fn model(&self, [peak, at, r]: [f32; 3], k: f32) -> (f32, [f32; 3]) {
+        let t = k - at;
+        let (g, slope) = (self.g())(r * t);
+        (peak * g, [g, -peak * r * slope, peak * t * slope])
+    }
+
+    /// The samples `k` of the contact at `p` that the sum row takes: neither clipped nor a
+    /// flank sample; `None` past [`SUM_SAMPLES`].
+    fn rest_of(&self, [_, at, r]: [f32; 3]) -> Option<impl Iterator<Item = f32> + '_> {
+        let start = at - self.shape.peak_at / r;
+        let (first, last) = (libm::ceilf(start), libm::floorf(start + 1.0 / r));
+        let count = last - first + 1.0;
+        if count.is_nan() || count > SUM_SAMPLES as f32 {
+            return None;
+        }
+        let run = self.run;
+        Some(
+            (0..count.max(0.0) as usize)
+                .map(move |i| first + i as f32)
+                .filter(move |&k| !(-2.0..run + 2.0).contains(&k)),
+        )
+    }
+
+    /// The sum row at `p`, weighted: `sum_weight [dS/dF_peak, dS/dk_peak, dS/dr, rest - S]`
+    /// with `S` the model's sum over [`Self::rest_of`].
+    fn sum_row(&self, p: [f32; 3]) -> Option<[f32; 4]> {
+        let (s, [j1, j2, j3]) = self.rest_of(p)?.fold((0.0, [0.0f32; 3]), |(s, j), k| {
+            let (m, g) = self.model(p, k);
+            (s + m, [j[0] + g[0], j[1] + g[1], j[2] + g[2]])
+        });
+        let w = self.sum_weight;
+        Some([w * j1, w * j2, w * j3, w * (self.rest - s)])
+    }
+
+    /// The sum's standard deviation at `p` (counts): the noise of its `rest_samples` and the
+    /// table's error at each contact sample in it, summed (it may share one sign), with the
+    /// force at the reach's ends where the reach leaves out an end interval (a sample may
+    /// lie there, where the table's error is not bounded: the pulse rises to that force from
+    /// 0, or falls from it to 0).
+    fn sum_sigma(&self, p: [f32; 3]) -> Option<f32> {
+        let [peak, at, r] = p;
+        let shape = self.shape;
+        let start = at - shape.peak_at / r;
+        let [inner, ends] = shape.error;
+        let [lo, hi] = shape.reach;
+        let unread = if lo > 0.0 { shape.at(lo).0 } else { 0.0 }
+            + if hi < 1.0 { shape.at(hi).0 } else { 0.0 };
+        let table = self.rest_of(p)?.fold(unread * peak, |a, k| {
+            let end = in_end_interval(r * (k - start));
+            a + if end { ends } else { inner } * peak
+        });
+        let n = self.rest_samples.max(0.0);
+        let sigma = libm::sqrtf(n * self.noise * self.noise + table * table);
+        (sigma > 0.0 && sigma.is_finite()).then_some(sigma)
+    }
+
+    /// The residual sum of squares at `p`: the four samples' and the weighted sum row's.
+    fn rss(&self, p: [f32; 3]) -> Option<f32> {
+        let flanks = self.ks.iter().zip(&self.ys).fold(0.0, |a, (&k, &y)| {
+            let e = y - self.model(p, k).0;
+            a + e * e
+        });
+        let [.., e] = self.sum_row(p)?;
+        Some(flanks + e * e)
+    }
 }
 
 /// The flank fit's start `[F_peak, k_peak, r]`: of [`SCAN`] inverse durations `r` evenly over

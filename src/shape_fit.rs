@@ -258,25 +258,31 @@ fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32
 /// [`normal_equations`]); `None` when `N` is singular.
 #[inline(never)]
 fn gauss_newton(ks: &[f32], ys: &[f32], p: [f32; 3]) -> Option<([f32; 3], Matrix3, [f32; 3])> {
-    gauss_newton_of(ks, ys, p, peak_shape)
+    gauss_newton_of(ks, ys, p, peak_shape, &[])
 }
 
-/// [`gauss_newton`] with the template `shape(x) = (g, dg/dx)` in place of [`peak_shape`].
+/// [`gauss_newton`] with the template `shape(x) = (g, dg/dx)` in place of [`peak_shape`], and
+/// rows beside the samples', each `[dm/dF_max, dm/dk_peak, dm/dd, y - m]` (weighted against
+/// one sample as the caller needs; zeros add nothing).
 pub(crate) fn gauss_newton_of(
     ks: &[f32],
     ys: &[f32],
     p: [f32; 3],
     shape: impl Fn(f32) -> (f32, f32),
+    extra: &[[f32; 4]],
 ) -> Option<([f32; 3], Matrix3, [f32; 3])> {
-    let (n, b, c) = normal_equations(ks, ys, p, shape);
+    let (mut n, mut b, c) = normal_equations(ks, ys, p, shape);
+    for &[e1, e2, e3, r] in extra {
+        add_row(&mut n, &mut b, [e1, e2, e3], r);
+    }
     let inv = inverse3(&n)?;
     let step = inv.map(|row| row[0] * b[0] + row[1] * b[1] + row[2] * b[2]);
     Some(([p[0] + step[0], p[1] + step[1], p[2] + step[2]], inv, c))
 }
 
 /// The Gauss-Newton normal equations of `F_max g(d (k - k_peak))` (the template `shape(x) =
-/// (g, dg/dx)`: [`peak_shape`], or a damped contact's tabulated pulse with `k_peak` the
-/// contact's start, `crate::pulse_shape::shape_flank_fit`) at
+/// (g, dg/dx)`: [`peak_shape`], or a contact's tabulated pulse about its peak,
+/// `crate::pulse_shape::shape_flank_fit`) at
 /// `p = [F_max, k_peak, d]` over the samples `ys` at `ks` (samples; `t = k - k_peak`):
 /// `[n11, n12, n13, n22, n23, n33]`, the right side `b` and the column sums `c` of the
 /// columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'` and `dm/dd = F_max t g'`.
@@ -292,19 +298,26 @@ fn normal_equations(
         let t = k - at;
         let (g, slope) = shape(d * t);
         let (j1, j2, j3) = (g, -peak * d * slope, peak * t * slope);
-        let r = y - peak * g;
-        n = [
-            n[0] + j1 * j1,
-            n[1] + j1 * j2,
-            n[2] + j1 * j3,
-            n[3] + j2 * j2,
-            n[4] + j2 * j3,
-            n[5] + j3 * j3,
-        ];
-        b = [b[0] + j1 * r, b[1] + j2 * r, b[2] + j3 * r];
+        add_row(&mut n, &mut b, [j1, j2, j3], y - peak * g);
         c = [c[0] + j1, c[1] + j2, c[2] + j3];
     }
     (n, b, c)
+}
+
+/// Adds one row, the model's gradient `j = [dm/dF_max, dm/dk_peak, dm/dd]` with the residual
+/// `r = y - m`, to the normal equations `n = [n11, n12, n13, n22, n23, n33]` and their right
+/// side `b`: `n += j j^T`, `b += j r`.
+#[inline(always)]
+fn add_row(n: &mut [f32; 6], b: &mut [f32; 3], [j1, j2, j3]: [f32; 3], r: f32) {
+    *n = [
+        n[0] + j1 * j1,
+        n[1] + j1 * j2,
+        n[2] + j1 * j3,
+        n[3] + j2 * j2,
+        n[4] + j2 * j3,
+        n[5] + j3 * j3,
+    ];
+    *b = [b[0] + j1 * r, b[1] + j2 * r, b[2] + j3 * r];
 }
 
 /// A 3 x 3 matrix, by rows.
@@ -333,7 +346,8 @@ pub const FLANK_REACH: f32 = 1.3;
 /// A pulse clipped at the ADC's full scale as the flank fits read it ([`flank_fit`],
 /// `crate::pulse_shape::shape_flank_fit`): the two samples before the first clipped one (at
 /// `k = -2, -1`), the two after the last (`k = run, run + 1`), the clipped samples, the
-/// clipping level and the sum of all the pulse's samples (counts above the baseline).
+/// clipping level and the sum of all the pulse's samples (counts above the baseline) with
+/// their number.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Flanks {
     /// The samples at `k = -2, -1` (counts).
@@ -346,6 +360,8 @@ pub struct Flanks {
     pub level: f32,
     /// Sum of all the pulse's samples (counts).
     pub sum: f32,
+    /// Samples in `sum` (the pulse's, with those before its trigger).
+    pub samples: f32,
 }
 
 impl Flanks {
@@ -354,7 +370,14 @@ impl Flanks {
     ///
     /// ```
     /// use coalshock::shape_fit::Flanks;
-    /// let f = Flanks { before: [1.0, 2.0], run: 3.0, after: [2.5, 1.5], level: 3.0, sum: 16.0 };
+    /// let f = Flanks {
+    ///     before: [1.0, 2.0],
+    ///     run: 3.0,
+    ///     after: [2.5, 1.5],
+    ///     level: 3.0,
+    ///     sum: 16.0,
+    ///     samples: 7.0,
+    /// };
     /// assert_eq!(f.samples(), Some(([-2.0, -1.0, 3.0, 4.0], [1.0, 2.0, 2.5, 1.5])));
     /// assert_eq!(Flanks { run: 0.0, ..f }.samples(), None);
     /// ```
@@ -399,6 +422,7 @@ pub fn flank_fit(flanks: &Flanks, noise: f32) -> Option<FlankFit> {
         after,
         level,
         sum,
+        ..
     } = *flanks;
     let d0 = step(sum / (C_AREA * level));
     let half = 0.5 * (run + 1.0);
