@@ -127,7 +127,9 @@ pub const FLAT_TOP_SAMPLES: u16 = 3;
 pub enum Detection {
     /// A pulse ended: its measurement, or why it cannot be measured.
     Pulse {
-        /// Index (from 0, counting every sample fed) of the pulse's largest sample.
+        /// Index (from 0, counting every sample fed) of the pulse's largest sample: of a
+        /// pulse clipped at full scale, the first clipped one, or the one nearest the peak
+        /// its flanks were measured to.
         at_sample: u64,
         /// The measured pulse or the reason it was rejected.
         outcome: Result<Measurement, RejectReason>,
@@ -1339,9 +1341,8 @@ impl<M: Backend> Detector<M> {
     #[inline(never)]
     fn measure_clipped(&self) -> Detection {
         let p = &self.pulse;
-        let at_sample = p.max_at;
         let reject = Detection::Pulse {
-            at_sample,
+            at_sample: p.max_at,
             outcome: Err(RejectReason::Saturated),
         };
         let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
@@ -1354,7 +1355,8 @@ impl<M: Backend> Detector<M> {
         };
         let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
         Detection::Pulse {
-            at_sample,
+            // The sample nearest the fitted peak (within the run).
+            at_sample: p.max_at + (fit.peak_at + 0.5).max(0.0) as u64,
             outcome: Ok(Measurement {
                 peak_force_n: fit.peak * self.force_per_count_n,
                 duration_s: fit.duration * self.dt_s,

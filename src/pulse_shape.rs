@@ -407,6 +407,7 @@ fn accepted(
     let (_, inv, _) = gauss_newton_of(&fit.ks, &fit.ys, p, felt, &[row])?;
     let fit = FlankFit {
         peak,
+        peak_at: at,
         duration: shape.area / (C_AREA * r),
         gains: flank_gains(&inv, peak, r),
     };

@@ -391,12 +391,14 @@ impl Flanks {
     }
 }
 
-/// What [`flank_fit`] reads from a clipped pulse: peak (counts), duration (samples), and the
-/// covariance of `(ln F_max, ln t_c)` over one sample's noise variance.
+/// What [`flank_fit`] reads from a clipped pulse: peak (counts), its time and the duration
+/// (samples), and the covariance of `(ln F_max, ln t_c)` over one sample's noise variance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FlankFit {
     /// Peak `F_max` (counts).
     pub peak: f32,
+    /// The peak's time `k_peak`, in samples after the first clipped one (within the run).
+    pub peak_at: f32,
     /// Duration `t_c = PEAK_OMEGA / d` (samples).
     pub duration: f32,
     /// `[var ln F_max, var ln t_c, cov]` over the noise variance of one sample (counts^-2).
@@ -451,6 +453,7 @@ pub fn flank_fit(flanks: &Flanks, noise: f32) -> Option<FlankFit> {
     }
     Some(FlankFit {
         peak,
+        peak_at: at,
         duration: PEAK_OMEGA / d,
         gains: flank_gains(&inv, peak, d),
     })

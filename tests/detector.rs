@@ -418,7 +418,8 @@ fn peak_shape_matches_the_integrated_pulse() {
 /// reports have a mean within 0.35 (the flanks' least squares, against the exact pulse of
 /// `common`) and a root mean square within 0.6-1.35 (the series' floor, `FLANK_FLOOR`, and
 /// the table's error, `HERTZ_TABLE_ERROR`, are conservative at this noise); no pulse
-/// measured is off by six of its sigmas.
+/// measured is off by six of its sigmas, and each is reported within 0.75 samples of its
+/// peak (the sample nearest the fitted one).
 #[test]
 fn clipped_pulses_are_measured_from_their_flanks() {
     const PULSES: usize = 1000;
@@ -440,6 +441,7 @@ fn clipped_pulses_are_measured_from_their_flanks() {
         let period = tc_s + gap_s + 2.0 / rate_hz;
         let n = ((PULSES as f64 * period + gap_s) * rate_hz) as usize;
         let (mut z, mut measured, mut saturated) = (Vec::new(), 0usize, 0usize);
+        let mut farthest = 0.0f64;
         for i in 0..n {
             let t = i as f64 / rate_hz;
             let k = (t / period).floor();
@@ -447,8 +449,17 @@ fn clipped_pulses_are_measured_from_their_flanks() {
             let y = hertz_pulse(t, t0, tc_s, amp) + 4.0 * rng.gauss();
             let raw = (y.round() as i64).clamp(-32768, 32767) as i32;
             match det.feed(raw) {
-                Some(Detection::Pulse { outcome: Ok(m), .. }) => {
+                Some(Detection::Pulse {
+                    outcome: Ok(m),
+                    at_sample,
+                }) => {
                     measured += 1;
+                    // The pulse's peak, at `t0 + t_c / 2` of the pulse the report falls in.
+                    let at = at_sample as f64 / rate_hz;
+                    let k = (at / period).floor();
+                    let t0 = k * period + gap_s + ((k * 0.618_033_988_75).fract()) / rate_hz;
+                    let off = at_sample as f64 - (t0 + 0.5 * tc_s) * rate_hz;
+                    farthest = farthest.max(off.abs());
                     let ef = (m.peak_force_n as f64 / amp).ln();
                     let et = (m.duration_s as f64 / tc_s).ln();
                     z.push([
@@ -483,6 +494,11 @@ fn clipped_pulses_are_measured_from_their_flanks() {
             .iter()
             .fold(0.0f64, |w, v| w.max(v[0].abs()).max(v[1].abs()));
         assert!(worst < 6.0, "{spp} {overdrive}: an error of {worst} sigma");
+        // Reported at the sample nearest the fitted peak (half a sample, and the fit's error).
+        assert!(
+            farthest <= 0.75,
+            "{spp} {overdrive}: reported {farthest} samples off"
+        );
         // Without the Hertz table (feature `pulse_shape`) only the series about the top.
         if cfg!(feature = "pulse_shape") || (overdrive <= 1.6 && spp >= 15.0) {
             assert_eq!(measured, PULSES, "{spp} {overdrive}");
