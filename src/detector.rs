@@ -1355,8 +1355,9 @@ impl<M: Backend> Detector<M> {
         };
         let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
         Detection::Pulse {
-            // The sample nearest the fitted peak (within the run).
-            at_sample: p.max_at + (fit.peak_at + 0.5).max(0.0) as u64,
+            // The sample nearest the fitted peak (within the run; through u32, which the FPU
+            // converts, where a u64 would call a library routine).
+            at_sample: p.max_at + u64::from((fit.peak_at + 0.5).max(0.0) as u32),
             outcome: Ok(Measurement {
                 peak_force_n: fit.peak * self.force_per_count_n,
                 duration_s: fit.duration * self.dt_s,
