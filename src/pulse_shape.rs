@@ -239,15 +239,15 @@ const SUM_SAMPLES: usize = 8192;
 /// the peak's time `k_peak` and the inverse duration `r = 1 / t_c` (per sample; about the
 /// peak, a change of `r` leaves it in place), to the four flank samples and, as a fifth row,
 /// to the sum of the pulse's other samples (the clipped ones read as the `level`), whose
-/// noise is its samples' and the table's error summed over them ([`ShapeFit::sum_sigma`]):
+/// noise is its samples' and the table's error summed over them (`ShapeFit::sum_sigma`):
 /// where a flank sample sees no force, the sum still tests the fit. It starts from the best
 /// of `SCAN` durations between the four samples' span, `run + 3`, and twice the sum over
-/// `level x area`, each with its peak at `PLACES` places across the run ([`scan_start`]),
+/// `level x area`, each with its peak at `PLACES` places across the run (`scan_start`),
 /// then takes up to `STEPS` Gauss-Newton steps, each halved until it lowers the residual
 /// (`F_peak` kept above half its value, the peak within the run, the clipped samples inside
 /// the contact, `r` within the scan's range). The duration it reports is the
 /// detector's, `area t_c / C_AREA` (the area over `C_AREA F_peak`). `None` when the fit does
-/// not describe a clipped pulse of this shape ([`accepted`]). With the fit, the table's error
+/// not describe a clipped pulse of this shape (`accepted`). With the fit, the table's error
 /// per sample at the flanks (counts: [`PulseShape::error`] times `F_peak`), which the fit's
 /// sigmas take beside the noise.
 ///
@@ -353,12 +353,13 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
 /// The fit at `p = [F_peak, k_peak, r]` when it describes a clipped pulse of the table's
 /// shape, with its sigmas from the normal equations at `p` ([`ShapeFit::weighted`]): `None`
 /// for a flank sample inside the contact but outside the table's `reach`, `r` at the end of
-/// its `range`, the fitted pulse below the `level` (less four noise RMS) at the run's ends,
-/// the residual `rss` of the five rows above `8 x` the four samples' noise RMS (the
-/// sensor's with the table's error at them), or fewer than four rows that see the pulse (a
-/// flank sample whose force is below its noise RMS does not: at the contact's start the fit
-/// sits on the kink between no force and the steep flank; a pulse that rises from no force
-/// past the level within one sample leaves three, and nothing would test the fit).
+/// its `range`, the fitted pulse below the `level` at the run's ends (less four times the
+/// noise RMS of a flank sample: the sensor's with the table's error at the four), their
+/// residual `rss` with the sum row's above `8 x` that RMS, or fewer than four rows that see
+/// the pulse (a flank sample whose force is below its noise RMS does not: at the contact's
+/// start the fit sits on the kink between no force and the steep flank; a pulse that rises
+/// from no force past the level within one sample leaves three, and nothing would test the
+/// fit).
 fn accepted(
     fit: &ShapeFit,
     p: [f32; 3],
