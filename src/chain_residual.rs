@@ -1,7 +1,9 @@
 //! The bias the equaliser itself leaves in a short pulse: at a few samples per pulse the
 //! regularised accelerometer inverse (and the modes' discretisation) reshape the Hertz pulse,
 //! and the detector's fit then reads its peak low and its duration long. Computed at build per
-//! point of the sampling correction, and added to the scene's [`SampledCalibration`].
+//! point of the sampling correction, and added to the scene's [`SampledCalibration`]; and the
+//! largest error it leaves in one sample ([`sample_error`]), which a clipped pulse's flank fit
+//! counts.
 //!
 //! The equalised chain passes the force through `R(w) = H(jw) Q(e^(j w T))`: `H` the chain
 //! ([`crate::equaliser`]), `Q` its equaliser with the reported delay taken off; `R(0) = 1`,
@@ -213,4 +215,170 @@ fn residual_at(weights: &[C], x: f32) -> f32 {
         rot = rot.mul(step);
     }
     acc
+}
+
+/// Points `x` (in pulse lengths from its middle) at which [`sample_error`] takes the error,
+/// in each of three sets: 49 in steps of 1/32 from a quarter of the pulse before it to a
+/// quarter after, and 49 about each end (the kinks, where the error is largest and as
+/// narrow as a sample) in steps of 1/8 sample over [`KINK_SAMPLES`] either side.
+const ERROR_XS: usize = 49;
+
+/// Samples either side of an end of the pulse in which [`sample_error`] takes the error
+/// at the ends: the accelerometer's FIR spans two either side of a sample.
+pub const KINK_SAMPLES: f32 = 3.0;
+
+/// How far [`sample_error`] integrates, in `v = w t_c`: the kink at a Hertz pulse's start
+/// puts a tail `S1 ~ v^(-5/2)` into its spectrum, which the equaliser cannot follow near
+/// and past the Nyquist frequency (`v = pi n`); past this the rest is bounded (`far_tail`).
+const ERROR_MAX_V: f32 = 2048.0;
+
+/// The step in `v` past [`MAX_V`] (`S1` and `e^(j v x)` turn by at most 1/8 of a period).
+const FAR_STEP_V: f32 = 1.0;
+
+/// The largest error the equaliser leaves in one sample of the kernel's Hertz pulse at `n`
+/// samples per pulse, as a fraction of its peak, `[in the body, at the ends]`: `max |y(x) -
+/// P(x)|` (module docs) over points `x` (`ERROR_XS` per set) from a quarter of the pulse
+/// before it to a quarter after, at the ends over those within [`KINK_SAMPLES`] of an end
+/// (the kinks `t^(3/2)` at the contact's start and end, whose spectrum falls slowest), in
+/// the body over the others. The integral is taken to `ERROR_MAX_V` (the table
+/// [`HERTZ_SPECTRUM`] to [`MAX_V`], then the closed form, `far_spectrum`) and bounded past
+/// it. 0 for a rigid chain. The flank fit of a clipped pulse counts it beside its table's
+/// error.
+///
+/// ```
+/// use coalshock::chain_residual::sample_error;
+/// use coalshock::equaliser::{Accelerometer, ChainDynamics, EqualiserDesign};
+/// use coalshock::math::Libm;
+/// let rigid = ChainDynamics::RIGID;
+/// let identity = EqualiserDesign::new::<Libm>(&rigid, 1e5).unwrap();
+/// assert_eq!(sample_error(&rigid, &identity, 1e5, 8.0), [0.0; 2]);
+/// // A 40 kHz piezo (zeta 0.05) at 100 kS/s: the error falls with the pulse's length,
+/// // slowest at the kinks (host-sim's exact chain: 2.1e-2 and 1.5e-3 at the ends).
+/// let piezo = rigid.with_accelerometer(Accelerometer {
+///     frequency_hz: 40e3,
+///     damping_ratio: 0.05,
+/// });
+/// let design = EqualiserDesign::new::<Libm>(&piezo, 1e5).unwrap();
+/// let [body8, ends8] = sample_error(&piezo, &design, 1e5, 8.0);
+/// let [body45, ends45] = sample_error(&piezo, &design, 1e5, 45.0);
+/// assert!(body8 < ends8 && body45 < ends45 && ends45 < ends8);
+/// assert!((ends8 / 2.1e-2 - 1.0).abs() < 0.05 && (ends45 / 1.5e-3 - 1.0).abs() < 0.05);
+/// ```
+#[inline(never)]
+pub fn sample_error(
+    dynamics: &ChainDynamics,
+    design: &EqualiserDesign,
+    sample_rate_hz: f32,
+    n: f32,
+) -> [f32; 2] {
+    if design.is_identity() || n.is_nan() || n <= 0.0 {
+        return [0.0; 2];
+    }
+    let t_c = n / sample_rate_hz;
+    let r = |v: f32| chain_term(C::new(0.0, v / t_c), dynamics).mul(design.response(v / n));
+    let kink = |end: f32| move |k: usize| end + (k as f32 - 24.0) / (8.0 * n);
+    let grid = error_integral(r, |k| k as f32 / 32.0 - 0.75);
+    let start = error_integral(r, kink(-0.5));
+    let end = error_integral(r, kink(0.5));
+    let tail = far_tail(ERROR_MAX_V);
+    let largest = |a: &[f32]| a.iter().fold(0.0f32, |m, e| m.max(e.abs())) + tail;
+    let within = KINK_SAMPLES / n;
+    let body = grid.iter().enumerate().filter(|&(k, _)| {
+        let x = k as f32 / 32.0 - 0.75;
+        (libm::fabsf(x) - 0.5).abs() > within
+    });
+    // The body's largest error lies at its edge, [`KINK_SAMPLES`] from an end: the kinks'
+    // outermost points.
+    let edges = [start, end].map(|a| [a.first(), a.last()].map(|e| e.map_or(0.0, |e| e.abs())));
+    let edge = edges.iter().flatten().fold(0.0f32, |m, &e| m.max(e));
+    let body = body.fold(edge, |m, (_, e)| m.max(e.abs())) + tail;
+    [body, largest(&start).max(largest(&end))]
+}
+
+/// The largest error of a raw sample of the kernel's Hertz pulse at `n` samples per pulse
+/// against the force `lag` samples before it, as a fraction of its peak, over the middle
+/// half of the pulse (where it clips): `max |y(x) - P(x - lag / n)|` with `y` the chain's
+/// continuous output, the module docs' integral with `R(w) = H(jw) e^(j w lag T)` in place of
+/// `H Q` (taken as [`sample_error`] takes it). 0 for a rigid chain. An accelerometer whose
+/// resonance lies near the pulse's band raises the raw top above the force's; a clipped
+/// pulse's flank fit allows the force this far below the level at a clipped sample.
+///
+/// ```
+/// use coalshock::chain_residual::raw_error;
+/// use coalshock::equaliser::{Accelerometer, ChainDynamics};
+/// assert_eq!(raw_error(&ChainDynamics::RIGID, 1e5, 8.0, 0.0), 0.0);
+/// // A 7.5 kHz MEMS band (zeta 0.43) at 26.7 kS/s: its top overshoots a short pulse's.
+/// let mems = ChainDynamics::RIGID.with_accelerometer(Accelerometer {
+///     frequency_hz: 7.5e3,
+///     damping_ratio: 0.43,
+/// });
+/// let lag = 0.43 * 26.7e3 / (core::f32::consts::PI * 7.5e3);
+/// let (short, long) = (raw_error(&mems, 26.7e3, 6.0, lag), raw_error(&mems, 26.7e3, 24.0, lag));
+/// assert!(short > 0.01 && long < short);
+/// ```
+#[inline(never)]
+pub fn raw_error(dynamics: &ChainDynamics, sample_rate_hz: f32, n: f32, lag: f32) -> f32 {
+    if dynamics.is_rigid() || n.is_nan() || n <= 0.0 {
+        return 0.0;
+    }
+    let t_c = n / sample_rate_hz;
+    let r = |v: f32| chain_term(C::new(0.0, v / t_c), dynamics).mul(cis(v * lag / n));
+    let middle = error_integral(r, |k| (k as f32 - 24.0) / 96.0);
+    middle.iter().fold(0.0f32, |m, e| m.max(e.abs())) + far_tail(ERROR_MAX_V)
+}
+
+/// `y(x) - P(x)` at the points `x_at(k)`, `k < ERROR_XS`, for a response `r(v)` over
+/// `v = w t_c`: the trapezoid rule of the module docs' integral of `(r - 1) S1` in steps of
+/// [`STEP_V`] to [`MAX_V`], then of [`FAR_STEP_V`] to [`ERROR_MAX_V`], each `e^(j v x)`
+/// turned by its step.
+#[inline(never)]
+fn error_integral(r: impl Fn(f32) -> C, x_at: impl Fn(usize) -> f32) -> [f32; ERROR_XS] {
+    let mut acc = [0.0f32; ERROR_XS];
+    let mut turn = [C::new(1.0, 0.0); ERROR_XS];
+    let mut step: [C; ERROR_XS] = core::array::from_fn(|k| cis(STEP_V * x_at(k)));
+    let near = (MAX_V / STEP_V) as usize;
+    let far = ((ERROR_MAX_V - MAX_V) / FAR_STEP_V) as usize;
+    for i in 0..=near + far {
+        let (v, h, s1) = if i <= near {
+            let h = match i {
+                0 => 0.5 * STEP_V,
+                i if i == near => 0.5 * (STEP_V + FAR_STEP_V),
+                _ => STEP_V,
+            };
+            let v = i as f32 * STEP_V;
+            (v, h, spectrum(v))
+        } else {
+            let v = MAX_V + (i - near) as f32 * FAR_STEP_V;
+            let h = if i == near + far { 0.5 } else { 1.0 } * FAR_STEP_V;
+            (v, h, far_spectrum(v))
+        };
+        if i == near {
+            step = core::array::from_fn(|k| cis(FAR_STEP_V * x_at(k)));
+        }
+        let w = r(v)
+            .sub(C::new(1.0, 0.0))
+            .scale(s1 * h / core::f32::consts::PI);
+        for ((a, t), s) in acc.iter_mut().zip(turn.iter_mut()).zip(&step) {
+            *a += w.mul(*t).re;
+            *t = t.mul(*s);
+        }
+    }
+    acc
+}
+
+/// `S1(v)` past [`MAX_V`] in closed form, `Gamma(5/2) sin(pi (7/4 - a)) Gamma(a - 3/4) /
+/// (2^(3/2) pi Gamma(a + 7/4))` with `a = v / (2 pi)` (the reflection of [`HERTZ_SPECTRUM`]'s
+/// form), the ratio of Gammas through `lgamma`.
+fn far_spectrum(v: f32) -> f32 {
+    let a = v / core::f32::consts::TAU;
+    let ratio = libm::expf(libm::lgammaf(a - 0.75) - libm::lgammaf(a + 1.75));
+    let gamma_5_2 = 1.329_340_4;
+    let sin = libm::sinf(core::f32::consts::PI * (1.75 - a));
+    gamma_5_2 * sin * ratio / (2.0 * core::f32::consts::SQRT_2 * core::f32::consts::PI)
+}
+
+/// A bound of the error integral past `v`: `(1 / pi) int_v^inf |R - 1| |S1| dv` with
+/// `|R - 1| <= 2` and `|S1| <= 14.8 v^(-5/2)` (`far_spectrum`'s envelope), `6.3 v^(-3/2)`.
+fn far_tail(v: f32) -> f32 {
+    2.0 * 14.8 * (2.0 / 3.0) / core::f32::consts::PI / (v * libm::sqrtf(v))
 }
