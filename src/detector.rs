@@ -35,13 +35,17 @@
 //!   `max(3, n / 20)` (times `Settings::flat_top_ratio` for a contact with a broader top) or
 //!   more consecutive samples equal to the pulse's largest one, on a sensor with at least one
 //!   count of noise, is a clipped top: `Saturated`.
-//! - Clipped at the ADC's full scale (on a rigid chain): the two samples before the first
-//!   clipped one and the two after the last give `F_max` and `t_c` by the least-squares fit
-//!   of the Hertz shape to them ([`flank_fit`], `Detector::measure_clipped`), or of a damped
-//!   contact's own tabulated shape (`Settings::pulse_shape`,
-//!   `crate::pulse_shape::shape_flank_fit`), with their sigmas from the fit; a pulse whose
-//!   flanks are too short, whose contact's shape the scene does not carry, or that the fit
-//!   does not describe stays `Saturated`.
+//! - Clipped at the ADC's full scale (on a rigid chain, or with the feature `pulse_shape`
+//!   behind an accelerometer alone): the two samples before the first clipped one and the
+//!   two after the last give `F_max` and `t_c` by the least-squares fit of the Hertz shape to
+//!   them ([`flank_fit`], `Detector::measure_clipped`), or of a damped contact's own
+//!   tabulated shape (`Settings::pulse_shape`, `crate::pulse_shape::shape_flank_fit`), with
+//!   their sigmas from the fit. Behind an accelerometer the flank samples lie beyond the
+//!   equaliser's delay either side of the clipped ones (its FIR read a clipped sample into
+//!   those), and each carries the equaliser's own error at the pulse's length
+//!   ([`crate::chain_residual::sample_error`]). A pulse whose flanks are too short, whose
+//!   contact's shape the scene does not carry, that the fit does not describe, or that rang
+//!   through beam modes stays `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the level a sample above it must pass to
@@ -78,7 +82,8 @@ use crate::scene::{ContactCalibration, Scene};
 pub const PRE_TRIGGER: usize = 32;
 
 pub use crate::shape_fit::{
-    C_AREA, C_ENERGY, FlankFit, Flanks, PEAK_OMEGA, PeakFit, flank_fit, peak_fit, shape_fit,
+    C_AREA, C_ENERGY, FlankChain, FlankFit, Flanks, PEAK_OMEGA, PeakFit, flank_fit, peak_fit,
+    shape_fit,
 };
 
 pub use crate::scene::MIN_DURATION_SAMPLES;
@@ -159,6 +164,11 @@ enum State {
     Unprimed,
 }
 
+/// What [`Pulse::track_clipping`] reads a raw sample against: the ADC's low and high ends
+/// (counts) and the samples after the last clipped one that the equaliser's FIR took from it.
+#[cfg(feature = "pulse_shape")]
+type Clip = (i32, i32, u8);
+
 /// Running sums of the pulse being cut.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -182,9 +192,19 @@ struct Pulse {
     /// Samples at the ADC's full scale, and whether one sat at its low end.
     clipped: u16,
     low_clip: bool,
-    /// The two samples after the last one at full scale, as far as they came.
+    /// The two samples after the last one at full scale and the `2 guard` after it (those
+    /// the equaliser's FIR took from a clipped one), as far as they came
+    /// (`after_clip_count - 2 guard`).
     after_clip: [f32; 2],
     after_clip_count: u8,
+    /// The two samples before the first one at full scale, its index, and the sum of the
+    /// samples from it to the `2 guard` after the last.
+    #[cfg(feature = "pulse_shape")]
+    before_clip: [f32; 2],
+    #[cfg(feature = "pulse_shape")]
+    clip_at: u64,
+    #[cfg(feature = "pulse_shape")]
+    run_sum: f32,
     last: f32,
     valley: f32,
     above_trigger: u32,
@@ -227,6 +247,12 @@ impl Pulse {
         low_clip: false,
         after_clip: [0.0; 2],
         after_clip_count: 0,
+        #[cfg(feature = "pulse_shape")]
+        before_clip: [0.0; 2],
+        #[cfg(feature = "pulse_shape")]
+        clip_at: 0,
+        #[cfg(feature = "pulse_shape")]
+        run_sum: 0.0,
         last: 0.0,
         valley: 0.0,
         above_trigger: 0,
@@ -270,6 +296,7 @@ impl Pulse {
 
     /// Counts raw samples at the ADC's full scale (`adc_max`) and at its low end (`adc_min`),
     /// and keeps the first two values `v` after the last one at full scale.
+    #[cfg(not(feature = "pulse_shape"))]
     #[inline(always)]
     fn track_clipping(&mut self, sample: i32, v: f32, adc_min: i32, adc_max: i32) {
         if sample >= adc_max {
@@ -282,6 +309,39 @@ impl Pulse {
         } else if let Some(slot) = self.after_clip.get_mut(self.after_clip_count as usize) {
             *slot = v;
             self.after_clip_count += 1;
+        }
+    }
+
+    /// Counts raw samples at the ADC's full scale (`adc_max`) and at its low end (`adc_min`);
+    /// keeps the two values `v` before the first at full scale (`v` of sample `index`, `older`
+    /// and `prev` before it), and the first two values after the last at full scale and the
+    /// `guard2` after it that an equaliser's FIR took from it; sums the values in between.
+    #[cfg(feature = "pulse_shape")]
+    #[inline(always)]
+    fn track_clipping(&mut self, sample: i32, v: f32, older: f32, index: u64, clip: Clip) {
+        let (adc_min, adc_max, guard2) = clip;
+        if sample >= adc_max {
+            if self.clipped == 0 {
+                (self.before_clip, self.clip_at) = ([older, self.prev], index);
+            }
+            self.saturated = true;
+            self.clipped = self.clipped.saturating_add(1);
+            self.after_clip_count = 0;
+            self.run_sum += v;
+        } else if sample <= adc_min {
+            self.saturated = true;
+            self.low_clip = true;
+        } else if self.clipped > 0 {
+            let count = self.after_clip_count;
+            match count.checked_sub(guard2) {
+                None => self.run_sum += v,
+                Some(k) => {
+                    if let Some(slot) = self.after_clip.get_mut(k as usize) {
+                        *slot = v;
+                    }
+                }
+            }
+            self.after_clip_count = count.saturating_add(1);
         }
     }
 
@@ -428,6 +488,19 @@ pub struct Detector<M: Backend = DefaultBackend> {
     ring_sum: f32,
     adc_min: i32,
     adc_max: i32,
+    /// Twice the equaliser's delay behind a chain of an accelerometer alone (the samples
+    /// either side of a clipped run that its FIR takes from a clipped one), else 0.
+    #[cfg(feature = "pulse_shape")]
+    guard2: u8,
+    /// How far the raw samples lag the force behind the accelerometer (samples,
+    /// `FlankChain::lag`).
+    #[cfg(feature = "pulse_shape")]
+    clip_lag: f32,
+    /// The equaliser's error per sample over the peak at [`clip_error_n`]`(k)` samples per
+    /// pulse, in the body and at the ends ([`crate::chain_residual::sample_error`]), and the
+    /// raw samples' ([`crate::chain_residual::raw_error`]); zeros on a rigid chain.
+    #[cfg(feature = "pulse_shape")]
+    clip_errors: [[f32; CLIP_ERROR_POINTS]; 3],
     dt_s: f32,
     force_per_count_n: f32,
     baseline: f32,
@@ -465,6 +538,10 @@ impl<M: Backend> Detector<M> {
         let rigid = scene.equaliser().is_identity();
         let (ring_weight, ring_decay) = Self::ring_weights(rigid, fs);
         let hertz = s.contact == ContactCalibration::HERTZ && plain_top(s);
+        #[cfg(feature = "pulse_shape")]
+        let clip_lag = sensor.dynamics.accelerometer().map_or(0.0, |a| {
+            a.damping_ratio * fs / (core::f32::consts::PI * a.frequency_hz)
+        });
         let modes = sensor.dynamics.modes();
         let mut ring_omegas = [0.0; crate::equaliser::MAX_MODES];
         for (w, mode) in ring_omegas.iter_mut().zip(modes) {
@@ -485,7 +562,7 @@ impl<M: Backend> Detector<M> {
             hertz,
             sampling_calibrated: s.corrects_sampling(),
             #[cfg(feature = "pulse_shape")]
-            pulse_shape: clip_shape(s, hertz, rigid),
+            pulse_shape: clip_shape(s, modes.is_empty()),
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -498,6 +575,12 @@ impl<M: Backend> Detector<M> {
             ring_sum: 0.0,
             adc_min: sensor.adc_min,
             adc_max: sensor.adc_max,
+            #[cfg(feature = "pulse_shape")]
+            guard2: (2 * scene.equaliser().delay_samples()).min(8) as u8,
+            #[cfg(feature = "pulse_shape")]
+            clip_lag,
+            #[cfg(feature = "pulse_shape")]
+            clip_errors: clip_errors(scene, clip_lag),
             dt_s: 1.0 / fs,
             force_per_count_n: sensor.force_per_count_n,
             baseline: 0.0,
@@ -1004,7 +1087,16 @@ impl<M: Backend> Detector<M> {
         // Second difference at the previous sample.
         p.min_curvature = p.min_curvature.min(p.prev + v - 2.0 * p.last);
         p.prev = p.last;
+        #[cfg(not(feature = "pulse_shape"))]
         p.track_clipping(sample, v, self.adc_min, self.adc_max);
+        #[cfg(feature = "pulse_shape")]
+        p.track_clipping(
+            sample,
+            v,
+            older,
+            index,
+            (self.adc_min, self.adc_max, self.guard2),
+        );
         p.track_top(sample);
         p.track_moments(v);
         p.track_max(v, older, index, self.noise);
@@ -1331,12 +1423,14 @@ impl<M: Backend> Detector<M> {
     }
 
     /// A pulse with samples at the ADC's full scale, measured from its unclipped flanks when
-    /// the clipped samples are one run at its top, on a rigid chain, with two samples either
-    /// side of the run: an undamped pulse by the Hertz shape ([`flank_fit`]), a damped one by
-    /// the contact's own (`Settings::pulse_shape`, [`shape_flank_fit`]); otherwise, or when
-    /// the fit does not describe the flanks, `Saturated`. Its sigmas are the fit's, from the
-    /// noise and the four samples (with the table's, the pulse's sum); the shape and skewness
-    /// checks, which a clipped top fails, are not made.
+    /// the clipped samples are one run at its top, on a rigid chain or behind an accelerometer
+    /// alone (feature `pulse_shape`), with two samples either side of the run (beyond those
+    /// the equaliser's FIR took from a clipped one): an undamped pulse by the Hertz shape
+    /// ([`flank_fit`], rigid only), a damped one by the contact's own (`Settings::pulse_shape`,
+    /// [`shape_flank_fit`]); otherwise, or when the fit does not describe the flanks,
+    /// `Saturated`. Its sigmas are the fit's, from the noise and the four samples (with the
+    /// table's, the pulse's sum); the shape and skewness checks, which a clipped top fails,
+    /// are not made.
     #[cold]
     #[inline(never)]
     fn measure_clipped(&self) -> Detection {
@@ -1346,18 +1440,19 @@ impl<M: Backend> Detector<M> {
             outcome: Err(RejectReason::Saturated),
         };
         let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
-        if !(whole && self.ring_weight <= 0.0 && p.after_clip_count >= 2 && p.clipped == p.flat) {
+        let (flanks, first) = self.flanks();
+        let after = p.after_clip_count >= 2 + self.guard2();
+        if !(whole && self.flanks_readable() && after && p.clipped == p.flat) {
             return reject;
         }
-        let run = p.clipped as f32;
-        let Some((fit, noise2, floor2)) = self.fit_flanks(run) else {
+        let Some((fit, noise2, floor2)) = self.fit_flanks(&flanks) else {
             return reject;
         };
         let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
         Detection::Pulse {
             // The sample nearest the fitted peak (within the run; through u32, which the FPU
             // converts, where a u64 would call a library routine).
-            at_sample: p.max_at + u64::from((fit.peak_at + 0.5).max(0.0) as u32),
+            at_sample: first + u64::from((fit.peak_at + 0.5).max(0.0) as u32),
             outcome: Ok(Measurement {
                 peak_force_n: fit.peak * self.force_per_count_n,
                 duration_s: fit.duration * self.dt_s,
@@ -1372,15 +1467,12 @@ impl<M: Backend> Detector<M> {
         }
     }
 
-    /// The flank fit of a clipped run of `run` samples, the variance per sample its gains
-    /// take (counts^2) and its template's own error (log units squared): for an undamped
-    /// contact, the noise's and the Hertz series' [`FLANK_FLOOR`]^2; where that series does
-    /// not reach the flanks, or for a damped contact, with the contact's [`PulseShape`] (the
-    /// Hertz pulse's own, [`PulseShape::hertz`], or the scene's), the noise's with the table's
-    /// error at the four samples (`PulseShape::error`), and no floor. `None` for any other
-    /// contact, or when the fit fails.
-    fn fit_flanks(&self, run: f32) -> Option<(FlankFit, f32, f32)> {
+    /// The clipped pulse as the flank fits read it, and the index of its run's first sample:
+    /// on a rigid chain, the clipped samples at the largest value.
+    #[cfg(not(feature = "pulse_shape"))]
+    fn flanks(&self) -> (Flanks, u64) {
         let p = &self.pulse;
+        let run = p.clipped as f32;
         let flanks = Flanks {
             before: p.before_max,
             run,
@@ -1388,30 +1480,172 @@ impl<M: Backend> Detector<M> {
             level: p.max,
             sum: p.sum,
             samples: p.samples as f32,
+            run_sum: run * p.max,
+            chain: FlankChain::RIGID,
         };
+        (flanks, p.max_at)
+    }
+
+    /// The clipped pulse as the flank fits read it, and the index of its run's first sample:
+    /// the clipped samples and the equaliser's delay either side of them (those its FIR took
+    /// from a clipped one), at the level of the ADC's full scale.
+    #[cfg(feature = "pulse_shape")]
+    fn flanks(&self) -> (Flanks, u64) {
+        let p = &self.pulse;
+        let guard2 = f32::from(self.guard2);
+        let flanks = Flanks {
+            before: p.before_clip,
+            run: p.clipped as f32 + guard2,
+            after: p.after_clip,
+            level: self.adc_max as f32 - self.baseline,
+            sum: p.sum,
+            samples: p.samples as f32,
+            run_sum: p.run_sum,
+            chain: FlankChain {
+                guard: 0.5 * guard2,
+                lag: self.clip_lag,
+                ..FlankChain::RIGID
+            },
+        };
+        (flanks, p.clip_at)
+    }
+
+    /// `flanks.chain` with the chain's errors at a pulse of `t_c` samples
+    /// (`FlankChain::sample_error` and `level_error`, from `Detector::clip_errors`); zeros on
+    /// a rigid chain.
+    #[cfg(feature = "pulse_shape")]
+    fn clip_chain(&self, flanks: &Flanks, t_c: f32) -> FlankChain {
+        let at = 2.0 * libm::log2f(t_c / CLIP_ERROR_FIRST_N);
+        let position = crate::math::table_position(at, CLIP_ERROR_POINTS);
+        let [body, ends, raw] = self
+            .clip_errors
+            .map(|e| crate::math::interpolate(&e, position));
+        FlankChain {
+            sample_error: [body, ends],
+            level_error: raw,
+            ..flanks.chain
+        }
+    }
+
+    /// Samples after a clipped run that the equaliser's FIR took from a clipped one (twice
+    /// its delay behind an accelerometer alone; 0 on a rigid chain, and always without the
+    /// feature `pulse_shape`).
+    fn guard2(&self) -> u8 {
+        #[cfg(feature = "pulse_shape")]
+        return self.guard2;
+        #[cfg(not(feature = "pulse_shape"))]
+        0
+    }
+
+    /// Whether the chain lets the flanks of a clipped pulse be read: a rigid one, or with
+    /// the feature `pulse_shape` one of an accelerometer alone (whose FIR takes a few samples
+    /// from the run; beam modes' sections would ring from it under the flanks) when the
+    /// scene carries the contact's shape.
+    fn flanks_readable(&self) -> bool {
+        #[cfg(feature = "pulse_shape")]
+        if self.pulse_shape.is_some() {
+            return true;
+        }
+        self.ring_weight <= 0.0
+    }
+
+    /// The flank fit of a clipped pulse, the variance per sample its gains take (counts^2)
+    /// and its template's own error (log units squared): for an undamped contact on a rigid
+    /// chain, the noise's and the Hertz series' [`FLANK_FLOOR`]^2; where that series does not
+    /// reach the flanks, behind an accelerometer, or for a damped contact, with the
+    /// contact's [`PulseShape`] (the Hertz pulse's own, [`PulseShape::hertz`], or the
+    /// scene's), the noise's with the table's error at the four samples
+    /// (`PulseShape::error`; behind an accelerometer with the chain's own, [`FlankChain`],
+    /// first at the shortest pulse the fit allows, then at the fitted one), and no floor.
+    /// `None` for any other contact, or when the fit fails.
+    fn fit_flanks(&self, flanks: &Flanks) -> Option<(FlankFit, f32, f32)> {
         let noise2 = self.noise * self.noise;
-        if self.hertz {
-            if let Some(fit) = flank_fit(&flanks, self.noise) {
+        if self.hertz && self.guard2() == 0 {
+            if let Some(fit) = flank_fit(flanks, self.noise) {
                 return Some((fit, noise2, FLANK_FLOOR * FLANK_FLOOR));
             }
         }
         #[cfg(feature = "pulse_shape")]
         if self.pulse_shape.is_some() {
             let shape = &self.pulse_shape;
-            let (fit, table) = shape_flank_fit(&flanks, self.noise, shape)?;
+            // Behind an accelerometer, first with the chain's errors at the shortest pulse
+            // the fit allows (`run + 3` samples), then at the fitted one.
+            let first = Flanks {
+                chain: self.clip_chain(flanks, flanks.run + 3.0),
+                ..*flanks
+            };
+            let (mut fit, mut table) = shape_flank_fit(&first, self.noise, shape)?;
+            if flanks.chain != FlankChain::RIGID {
+                let flanks = Flanks {
+                    chain: self.clip_chain(flanks, fit.duration * C_AREA / shape.area),
+                    ..*flanks
+                };
+                (fit, table) = shape_flank_fit(&flanks, self.noise, shape)?;
+            }
             return Some((fit, noise2 + table * table, 0.0));
         }
         None
     }
 }
 
-/// The shape a clipped pulse is measured with (`Detector::measure_clipped`): the Hertz
-/// pulse's own table for the undamped Hertz contact (`hertz`), the scene's for another; none
-/// behind a chain that is not `rigid` (the flank fit is not reached there) or for a yielding
-/// top, so that the Hertz table's 1 024 steps are taken only where they are read.
+/// Points of the equaliser's error per sample that a clipped pulse's flank fit reads
+/// (`Detector::clip_errors`): from [`CLIP_ERROR_FIRST_N`] samples per pulse in steps of
+/// `sqrt 2`, to 113; a longer pulse takes the last.
 #[cfg(feature = "pulse_shape")]
-fn clip_shape(s: &crate::scene::Settings, hertz: bool, rigid: bool) -> PulseShape {
-    match (rigid && plain_top(s), hertz) {
+const CLIP_ERROR_POINTS: usize = 12;
+
+/// Samples per pulse at the first point of `Detector::clip_errors`.
+#[cfg(feature = "pulse_shape")]
+const CLIP_ERROR_FIRST_N: f32 = 2.5;
+
+/// Samples per pulse at point `k` of `Detector::clip_errors`: `2.5 sqrt(2)^k`.
+#[cfg(feature = "pulse_shape")]
+fn clip_error_n(k: usize) -> f32 {
+    CLIP_ERROR_FIRST_N * libm::powf(core::f32::consts::SQRT_2, k as f32)
+}
+
+/// The equaliser's error per sample of a pulse over its peak at [`clip_error_n`] samples per
+/// pulse, which a clipped pulse's flank fit counts beside the noise behind an accelerometer
+/// (the sample before the run, and after it, read the force through the equaliser); zeros
+/// on a rigid chain or where no flank fit is made.
+#[cfg(feature = "pulse_shape")]
+#[inline(never)]
+fn clip_errors<const N: usize, M: Backend>(
+    scene: &Scene<N, M>,
+    lag: f32,
+) -> [[f32; CLIP_ERROR_POINTS]; 3] {
+    let design = scene.equaliser();
+    let sensor = scene.sensor();
+    let mut out = [[0.0; CLIP_ERROR_POINTS]; 3];
+    if design.is_identity() || !sensor.dynamics.modes().is_empty() {
+        return out;
+    }
+    let (dynamics, fs) = (&sensor.dynamics, sensor.sample_rate_hz);
+    for k in 0..CLIP_ERROR_POINTS {
+        let n = clip_error_n(k);
+        let [body, ends] = crate::chain_residual::sample_error(dynamics, design, fs, n);
+        let raw = crate::chain_residual::raw_error(dynamics, fs, n, lag);
+        for (table, e) in out.iter_mut().zip([body, ends, raw]) {
+            if let Some(slot) = table.get_mut(k) {
+                *slot = e;
+            }
+        }
+    }
+    out
+}
+
+/// The shape a clipped pulse is measured with (`Detector::measure_clipped`): the Hertz
+/// pulse's own table for the undamped Hertz law (its ratios Hertz's, whatever sampling or
+/// chain correction it carries), the scene's for another; none behind a chain with beam
+/// modes (`readable` false: the flank fit is not reached there) or for a yielding top, so
+/// that the Hertz table's 1 024 steps are taken only where they are read.
+#[cfg(feature = "pulse_shape")]
+fn clip_shape(s: &crate::scene::Settings, readable: bool) -> PulseShape {
+    let hertz = ContactCalibration {
+        sampled: s.contact.sampled,
+        ..ContactCalibration::HERTZ
+    };
+    match (readable && plain_top(s), s.contact == hertz) {
         (false, _) => PulseShape::NONE,
         (true, true) => PulseShape::hertz(),
         (true, false) => s.pulse_shape,

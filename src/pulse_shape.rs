@@ -9,9 +9,10 @@
 //! restitution alone, so one table, which the host takes from its integrator, holds for every
 //! impact of a scene; Adams IMPACT with a fixed `c_max` is not self-similar and carries none.
 
+use crate::chain_residual::KINK_SAMPLES;
 use crate::error::Error;
 use crate::hertz::CONTACT_TIME_FACTOR;
-use crate::shape_fit::{C_AREA, FlankFit, Flanks, flank_gains, gauss_newton_of};
+use crate::shape_fit::{C_AREA, FlankChain, FlankFit, Flanks, flank_gains, gauss_newton_of};
 
 /// Points of a [`PulseShape`] over `u = 0..=1`, `u_j = j / (SHAPE_POINTS - 1)`.
 pub const SHAPE_POINTS: usize = 65;
@@ -253,7 +254,7 @@ const SUM_SAMPLES: usize = 8192;
 ///
 /// ```
 /// use coalshock::pulse_shape::{PulseShape, SHAPE_POINTS, SHAPE_STEP, shape_flank_fit};
-/// use coalshock::shape_fit::Flanks;
+/// use coalshock::shape_fit::{FlankChain, Flanks};
 /// // A skewed pulse, g = (27/4) u (1 - u)^2 (peak 1 at u = 1/3, area 9/16), 40 samples long
 /// // from k_0 = -9.3, with a peak of 2 400 counts clipped at 2 000.
 /// let mut s = PulseShape {
@@ -280,6 +281,8 @@ const SUM_SAMPLES: usize = 8192;
 ///     level: 2000.0,
 ///     sum: clipped.iter().sum(),
 ///     samples: clipped.len() as f32,
+///     run_sum: run * 2000.0,
+///     chain: FlankChain::RIGID,
 /// };
 /// let (fit, _) = shape_flank_fit(&flanks, 1.0, &s).unwrap();
 /// assert!((fit.peak / 2400.0 - 1.0).abs() < 1e-3);
@@ -300,9 +303,10 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
     let fit = ShapeFit {
         ks,
         ys,
-        rest: flanks.sum - ys.iter().sum::<f32>() - run * level,
+        rest: flanks.sum - ys.iter().sum::<f32>() - flanks.run_sum,
         rest_samples: flanks.samples - 4.0 - run,
         run,
+        chain: flanks.chain,
         shape,
         noise,
         sum_weight: 0.0,
@@ -312,10 +316,11 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
         // The clipped samples lie inside the contact: it starts before the first and ends
         // after the last.
         let (rise, fall) = (shape.peak_at / r, (1.0 - shape.peak_at) / r);
+        let (first, last) = fit.clipped();
         let at = at.max(-0.5).min(run - 0.5);
         [
             peak.max(floor),
-            at.min(rise - 0.01).max(run - 1.0 - fall + 0.01),
+            at.min(first + rise - 0.01).max(last - fall + 0.01),
             r,
         ]
     };
@@ -353,8 +358,10 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
 /// The fit at `p = [F_peak, k_peak, r]` when it describes a clipped pulse of the table's
 /// shape, with its sigmas from the normal equations at `p` ([`ShapeFit::weighted`]): `None`
 /// for a flank sample inside the contact but outside the table's `reach`, `r` at the end of
-/// its `range`, the fitted pulse below the `level` at the run's ends (less four times the
-/// noise RMS of a flank sample: the sensor's with the table's error at the four), their
+/// its `range`, the fitted pulse below the `level` where the first and the last clipped
+/// sample saw it (`ShapeFit::clipped`; less four times the noise RMS of a flank sample, the
+/// sensor's with the table's and the samples' own error, and the chain's
+/// `FlankChain::level_error` times `F_peak`), their
 /// residual `rss` with the sum row's above `8 x` that RMS, or fewer than four rows that see
 /// the pulse (a flank sample whose force is below its noise RMS does not: at the contact's
 /// start the fit sits on the kink between no force and the steep flank; a pulse that rises
@@ -369,7 +376,7 @@ fn accepted(
 ) -> Option<(FlankFit, f32)> {
     let [peak, at, r] = p;
     let shape = fit.shape;
-    let start = at - shape.peak_at / r;
+    let start = fit.start(p);
     // Each flank sample outside the contact (the force 0) or within the table's reach.
     let [reach_lo, reach_hi] = shape.reach;
     let inside = fit.ks.iter().all(|&k| {
@@ -379,7 +386,9 @@ fn accepted(
     let table = fit.flank_table(p);
     let noise = fit.noise;
     let sigma2 = noise * noise + table * table;
-    let edge = fit.model(p, 0.0).0.min(fit.model(p, fit.run - 1.0).0);
+    let (first, last) = fit.clipped();
+    let edge = fit.model(p, first).0.min(fit.model(p, last).0);
+    let level = level - fit.chain.level_error * peak;
     let free = r > 1.001 * r_lo && r < 0.999 * r_hi;
     if !(inside && free && edge >= level - 4.0 * libm::sqrtf(sigma2) && rss <= 64.0 * sigma2) {
         return None;
@@ -421,9 +430,9 @@ fn in_end_interval(u: f32) -> bool {
 }
 
 /// What [`shape_flank_fit`] fits: the four flank samples `ys` at `ks`, the sum `rest` of the
-/// pulse's other `rest_samples` samples less its clipped run's `run x level` (counts), the
-/// contact's table, the sensor's noise RMS (counts) and the weight of the sum's row against
-/// one flank sample.
+/// pulse's other `rest_samples` samples (counts; the flank samples and the run's taken off),
+/// the run's length, what the chain did to the samples ([`FlankChain`]), the contact's table, the sensor's noise
+/// RMS (counts) and the weight of the sum's row against one flank sample.
 #[derive(Clone, Copy)]
 struct ShapeFit<'a> {
     ks: [f32; 4],
@@ -431,24 +440,54 @@ struct ShapeFit<'a> {
     rest: f32,
     rest_samples: f32,
     run: f32,
+    chain: FlankChain,
     shape: &'a PulseShape,
     noise: f32,
     sum_weight: f32,
 }
 
 impl ShapeFit<'_> {
+    /// Where the force was at the level at the first and the last clipped sample (`k`): the
+    /// run less its guard at each end, `lag` earlier.
+    fn clipped(&self) -> (f32, f32) {
+        let FlankChain { guard, lag, .. } = self.chain;
+        let first = guard - lag;
+        (first, first + self.run - 1.0 - 2.0 * guard)
+    }
+
+    /// The contact's start at `p = [F_peak, k_peak, r]` (samples): `k_peak - u_peak / r`.
+    fn start(&self, [_, at, r]: [f32; 3]) -> f32 {
+        at - self.shape.peak_at / r
+    }
+
     /// The table about its peak, `x = r (k - k_peak)`: `(g, dg/dx)`.
     fn g(&self) -> impl Fn(f32) -> (f32, f32) + '_ {
         |x| self.shape.at(x + self.shape.peak_at)
     }
 
     /// The table's error per flank sample at `p` (counts, [`PulseShape::error`] times
-    /// `F_peak`): the larger where one lies in an end interval.
-    fn flank_table(&self, [peak, at, r]: [f32; 3]) -> f32 {
-        let start = at - self.shape.peak_at / r;
+    /// `F_peak`): the larger where one lies in an end interval; with the samples' own error
+    /// (`FlankChain::sample_error` times `F_peak`).
+    fn flank_table(&self, p: [f32; 3]) -> f32 {
+        let [peak, _, r] = p;
+        let start = self.start(p);
         let at_end = self.ks.iter().any(|&k| in_end_interval(r * (k - start)));
         let [inner, ends] = self.shape.error;
-        (if at_end { ends } else { inner }) * peak
+        (if at_end { ends } else { inner } + self.own_error(p)) * peak
+    }
+
+    /// The samples' own error over the peak at `p` (`FlankChain::sample_error`): at the ends
+    /// where a flank sample lies within [`KINK_SAMPLES`] of the contact's start or end.
+    fn own_error(&self, p: [f32; 3]) -> f32 {
+        let start = self.start(p);
+        let end = start + 1.0 / p[2];
+        let near = |k: f32| (k - start).abs() <= KINK_SAMPLES || (k - end).abs() <= KINK_SAMPLES;
+        let [body, ends] = self.chain.sample_error;
+        if self.ks.iter().any(|&k| near(k)) {
+            ends
+        } else {
+            body
+        }
     }
 
     /// The fit with its sum row weighted at `p` against one flank sample: the flank sample's
@@ -472,8 +511,8 @@ impl ShapeFit<'_> {
 
     /// The samples `k` of the contact at `p` that the sum row takes: neither clipped nor a
     /// flank sample; `None` past [`SUM_SAMPLES`].
-    fn rest_of(&self, [_, at, r]: [f32; 3]) -> Option<impl Iterator<Item = f32> + '_> {
-        let start = at - self.shape.peak_at / r;
+    fn rest_of(&self, p: [f32; 3]) -> Option<impl Iterator<Item = f32> + '_> {
+        let (start, r) = (self.start(p), p[2]);
         let (first, last) = (libm::ceilf(start), libm::floorf(start + 1.0 / r));
         let count = last - first + 1.0;
         if count.is_nan() || count > SUM_SAMPLES as f32 {
@@ -502,15 +541,18 @@ impl ShapeFit<'_> {
     /// table's error at each contact sample in it, summed (it may share one sign), with the
     /// force at the reach's ends where the reach leaves out an end interval (a sample may
     /// lie there, where the table's error is not bounded: the pulse rises to that force from
-    /// 0, or falls from it to 0).
+    /// 0, or falls from it to 0); and the samples' own error (`FlankChain::sample_error`) at
+    /// the flank samples and the run's: the equaliser keeps the sum of all the pulse's
+    /// samples, so what it moves into the others is what it takes from those.
     fn sum_sigma(&self, p: [f32; 3]) -> Option<f32> {
-        let [peak, at, r] = p;
+        let [peak, _, r] = p;
         let shape = self.shape;
-        let start = at - shape.peak_at / r;
+        let start = self.start(p);
         let [inner, ends] = shape.error;
         let [lo, hi] = shape.reach;
         let unread = if lo > 0.0 { shape.at(lo).0 } else { 0.0 }
-            + if hi < 1.0 { shape.at(hi).0 } else { 0.0 };
+            + if hi < 1.0 { shape.at(hi).0 } else { 0.0 }
+            + self.own_error(p) * (self.run + 4.0);
         let table = self.rest_of(p)?.fold(unread * peak, |a, k| {
             let end = in_end_interval(r * (k - start));
             a + if end { ends } else { inner } * peak

@@ -344,15 +344,17 @@ fn inverse3(&[a, b, c, e, f, i]: &[f32; 6]) -> Option<Matrix3> {
 pub const FLANK_REACH: f32 = 1.3;
 
 /// A pulse clipped at the ADC's full scale as the flank fits read it ([`flank_fit`],
-/// `crate::pulse_shape::shape_flank_fit`): the two samples before the first clipped one (at
-/// `k = -2, -1`), the two after the last (`k = run, run + 1`), the clipped samples, the
-/// clipping level and the sum of all the pulse's samples (counts above the baseline) with
-/// their number.
+/// `crate::pulse_shape::shape_flank_fit`): the two samples before the run (at `k = -2, -1`),
+/// the two after it (`k = run, run + 1`), the run (the clipped samples, and behind an
+/// accelerometer the [`FlankChain::guard`] samples either side of them that its equaliser's
+/// FIR took from a clipped one), the clipping level and the sum of all the pulse's samples (counts above
+/// the baseline) with their number and the run's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Flanks {
     /// The samples at `k = -2, -1` (counts).
     pub before: [f32; 2],
-    /// Clipped samples, `k = 0 .. run - 1` (at least 1).
+    /// The run's samples, `k = 0 .. run - 1`: clipped from `k = guard` to `run - 1 - guard`
+    /// ([`FlankChain::guard`], at least 1).
     pub run: f32,
     /// The samples at `k = run, run + 1` (counts).
     pub after: [f32; 2],
@@ -362,14 +364,52 @@ pub struct Flanks {
     pub sum: f32,
     /// Samples in `sum` (the pulse's, with those before its trigger).
     pub samples: f32,
+    /// Sum of the run's samples as read (counts): `run x level` on a rigid chain.
+    pub run_sum: f32,
+    /// What the chain did to the samples ([`FlankChain::RIGID`] on a rigid chain).
+    pub chain: FlankChain,
+}
+
+/// What a chain between the plate and the ADC does to a clipped pulse's samples as the flank
+/// fit reads them ([`Flanks::chain`]); nothing on a rigid chain ([`FlankChain::RIGID`]).
+/// Behind an accelerometer alone the equaliser is a FIR, whose output is wrong only where
+/// it read a clipped sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FlankChain {
+    /// Samples at each end of the run that are not clipped but read a clipped one (the
+    /// equaliser's delay).
+    pub guard: f32,
+    /// How far the raw samples lag the force (samples): the accelerometer's group delay at
+    /// low frequency, `2 zeta_a / w_a` times the rate, so that a clipped sample `k` saw the
+    /// force at about `k - lag` at or above the level.
+    pub lag: f32,
+    /// The error each sample carries beside the noise, as a fraction of the pulse's peak,
+    /// `[in the body, within crate::chain_residual::KINK_SAMPLES of an end of the contact]`:
+    /// the equaliser's ([`crate::chain_residual::sample_error`]).
+    pub sample_error: [f32; 2],
+    /// How far below the level the force `lag` before a clipped sample may lie, as a
+    /// fraction of the pulse's peak: the raw samples' own error against the force
+    /// ([`crate::chain_residual::raw_error`]; an accelerometer with a resonant peak raises
+    /// the pulse's top past the force's).
+    pub level_error: f32,
+}
+
+impl FlankChain {
+    /// A rigid chain: the samples are the force's.
+    pub const RIGID: FlankChain = FlankChain {
+        guard: 0.0,
+        lag: 0.0,
+        sample_error: [0.0; 2],
+        level_error: 0.0,
+    };
 }
 
 impl Flanks {
     /// The four samples' positions `k` and values, `None` unless the level and the sum are
-    /// finite and positive and at least one sample is clipped.
+    /// finite and positive, at least one sample is clipped and the guard is at least 0.
     ///
     /// ```
-    /// use coalshock::shape_fit::Flanks;
+    /// use coalshock::shape_fit::{FlankChain, Flanks};
     /// let f = Flanks {
     ///     before: [1.0, 2.0],
     ///     run: 3.0,
@@ -377,13 +417,19 @@ impl Flanks {
     ///     level: 3.0,
     ///     sum: 16.0,
     ///     samples: 7.0,
+    ///     run_sum: 9.0,
+    ///     chain: FlankChain::RIGID,
     /// };
     /// assert_eq!(f.samples(), Some(([-2.0, -1.0, 3.0, 4.0], [1.0, 2.0, 2.5, 1.5])));
     /// assert_eq!(Flanks { run: 0.0, ..f }.samples(), None);
+    /// let guard = FlankChain { guard: 1.5, ..FlankChain::RIGID };
+    /// assert_eq!(Flanks { chain: guard, ..f }.samples(), None);
     /// ```
     pub fn samples(&self) -> Option<([f32; 4], [f32; 4])> {
         let (level, sum, run) = (self.level, self.sum, self.run);
-        if !(level > 0.0 && sum > 0.0 && run >= 1.0 && level.is_finite() && sum.is_finite()) {
+        let guard = self.chain.guard;
+        let guarded = guard >= 0.0 && run - 2.0 * guard >= 1.0;
+        if !(level > 0.0 && sum > 0.0 && guarded && level.is_finite() && sum.is_finite()) {
             return None;
         }
         let ([b0, b1], [a0, a1]) = (self.before, self.after);
@@ -397,7 +443,7 @@ impl Flanks {
 pub struct FlankFit {
     /// Peak `F_max` (counts).
     pub peak: f32,
-    /// The peak's time `k_peak`, in samples after the first clipped one (within the run).
+    /// The peak's time `k_peak`, in samples after the run's first (within the run).
     pub peak_at: f32,
     /// Duration `t_c = PEAK_OMEGA / d` (samples).
     pub duration: f32,
@@ -405,9 +451,10 @@ pub struct FlankFit {
     pub gains: [f32; 3],
 }
 
-/// Peak and duration of a Hertz pulse whose top is clipped, from its unclipped flanks
-/// ([`Flanks`]: the two samples either side of the `run` clipped ones, the clipping `level`
-/// and the sum of all samples). The
+/// Peak and duration of a Hertz pulse whose top is clipped on a rigid chain (its
+/// [`Flanks::chain`] is not read: the samples are taken for the force's),
+/// from its unclipped flanks ([`Flanks`]: the two samples either side of the `run` clipped
+/// ones, the clipping `level` and the sum of all samples). The
 /// least-squares fit of `F_max g(d (k - k_peak))` ([`peak_shape`]) to the four, in `F_max`,
 /// `k_peak` and the phase step `d` (six Gauss-Newton steps from `k_peak` at the clipped run's
 /// middle, `d` from the area over the level, `F_max` through the nearer flank samples), gives

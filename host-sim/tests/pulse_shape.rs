@@ -5,7 +5,7 @@
 
 use coalshock::PulseShape;
 use coalshock::pulse_shape::{SHAPE_ERROR, shape_flank_fit};
-use coalshock::shape_fit::Flanks;
+use coalshock::shape_fit::{FlankChain, Flanks};
 use host_sim::impact::{ImpactSpec, simulate};
 use host_sim::law_spec::LawSpec;
 use host_sim::pulse_shape::{law_shape, scene_shape, shape_error};
@@ -150,6 +150,8 @@ fn read_clipped(
         level: LEVEL as f32,
         sum: ys.iter().sum::<f64>() as f32,
         samples: ys.len() as f32,
+        run_sum: (run as f64 * LEVEL) as f32,
+        chain: FlankChain::RIGID,
     };
     let (fit, table) = shape_flank_fit(&flanks, noise as f32, shape)?;
     let sigma2 = |g: f32| f64::from(g) * (noise * noise + f64::from(table).powi(2));
