@@ -27,7 +27,8 @@ pub const SHAPE_STEP: f32 = 1.0 / (SHAPE_POINTS - 1) as f32;
 /// `u_j = j SHAPE_STEP`, read between them by cubic Hermite interpolation ([`PulseShape::at`]).
 /// The flank fit reads it only within its `reach`, which leaves out the first or the last
 /// interval where the law's force starts or ends with an unbounded slope (Tsuji's rises like
-/// `u^(1/4)`), and outside the contact, where the force is 0. All zero
+/// `u^(1/4)`), and outside the contact, where the force is 0; a flank sample in an interval
+/// left out is not read. All zero
 /// ([`PulseShape::NONE`]): no table, and a damped pulse that clips is `Saturated`.
 /// `size_of` 544 B (65 points).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -226,6 +227,10 @@ const PLACES: usize = 8;
 /// Gauss-Newton steps of the flank fit, at most.
 const STEPS: usize = 32;
 
+/// Fits of a clipped pulse's flanks after the first, at most, each reading the flank samples
+/// as the last left them (`ShapeFit::read_at`).
+const READINGS: usize = 3;
+
 /// Halvings of a Gauss-Newton step that does not lower the residual, at most.
 const HALVINGS: usize = 6;
 
@@ -239,9 +244,12 @@ const SUM_SAMPLES: usize = 8192;
 /// fit of `F_peak g(r (k - k_peak) + u_peak)` (`u_peak` the table's `peak_at`), in `F_peak`,
 /// the peak's time `k_peak` and the inverse duration `r = 1 / t_c` (per sample; about the
 /// peak, a change of `r` leaves it in place), to the four flank samples and, as a fifth row,
-/// to the sum of the pulse's other samples (the clipped ones read as the `level`), whose
+/// to the sum of the pulse's other samples (the run's read as `Flanks::run_sum`), whose
 /// noise is its samples' and the table's error summed over them (`ShapeFit::sum_sigma`):
-/// where a flank sample sees no force, the sum still tests the fit. It starts from the best
+/// where a flank sample sees no force, the sum still tests the fit. A flank sample that lies
+/// in an end interval the table's reach leaves out is not read, and the fit is made again
+/// (`READINGS` times at most) until the samples it reads stay the same. It starts from the
+/// best
 /// of `SCAN` durations between the four samples' span, `run + 3`, and twice the sum over
 /// `level x area`, each with its peak at `PLACES` places across the run (`scan_start`),
 /// then takes up to `STEPS` Gauss-Newton steps, each halved until it lowers the residual
@@ -303,6 +311,7 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
     let fit = ShapeFit {
         ks,
         ys,
+        read: 4,
         rest: flanks.sum - ys.iter().sum::<f32>() - flanks.run_sum,
         rest_samples: flanks.samples - 4.0 - run,
         run,
@@ -325,13 +334,34 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
         ]
     };
     let kept = keep(start, 0.0);
-    let fit = fit.weighted(kept)?;
-    let mut p = kept;
+    let mut fit = fit.read_at(kept).weighted(kept)?;
+    let (mut p, mut best) = descend(&fit, kept, &keep)?;
+    // A flank sample that the fit moved into an end interval the reach leaves out: again,
+    // without reading it (`accepted` takes the last fit only when the samples it reads stay
+    // the same).
+    for _ in 0..READINGS {
+        let again = fit.read_at(p);
+        if again.ks == fit.ks && again.read == fit.read {
+            break;
+        }
+        fit = again.weighted(p)?;
+        (p, best) = descend(&fit, p, &keep)?;
+    }
+    accepted(&fit, p, best, level, range)
+}
+
+/// Up to [`STEPS`] Gauss-Newton steps of `fit` from `p`, each halved until it lowers the
+/// residual (the steep rise of a damped pulse can throw a full step off the pulse) and kept
+/// in range by `keep(step, floor)`; none that does: converged. The point and its residual.
+fn descend(
+    fit: &ShapeFit,
+    mut p: [f32; 3],
+    keep: &impl Fn([f32; 3], f32) -> [f32; 3],
+) -> Option<([f32; 3], f32)> {
     let mut best = fit.rss(p)?;
     for _ in 0..STEPS {
-        let (next, _, _) = gauss_newton_of(&ks, &ys, p, fit.g(), &[fit.sum_row(p)?])?;
-        // The Gauss-Newton step, halved until it lowers the residual (the steep rise of a
-        // damped pulse can throw a full step off the pulse); none that does: converged.
+        let (ks, ys) = fit.read();
+        let (next, _, _) = gauss_newton_of(ks, ys, p, fit.g(), &[fit.sum_row(p)?])?;
         let mut scale = 1.0;
         let mut moved = false;
         for _ in 0..HALVINGS {
@@ -352,12 +382,14 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
             break;
         }
     }
-    accepted(&fit, p, best, level, range)
+    Some((p, best))
 }
 
 /// The fit at `p = [F_peak, k_peak, r]` when it describes a clipped pulse of the table's
 /// shape, with its sigmas from the normal equations at `p` ([`ShapeFit::weighted`]): `None`
-/// for a flank sample inside the contact but outside the table's `reach`, `r` at the end of
+/// for flank samples read otherwise than the fit read them ([`ShapeFit::read_at`]), an unread
+/// one beyond the force its end interval spans (4 noise RMS outside 0 to the force at the
+/// reach's end or the model's), `r` at the end of
 /// its `range`, the fitted pulse below the `level` where the first and the last clipped
 /// sample saw it (`ShapeFit::clipped`; less four times the noise RMS of a flank sample, the
 /// sensor's with the table's and the samples' own error, and the chain's
@@ -376,16 +408,28 @@ fn accepted(
 ) -> Option<(FlankFit, f32)> {
     let [peak, at, r] = p;
     let shape = fit.shape;
-    let start = fit.start(p);
-    // Each flank sample outside the contact (the force 0) or within the table's reach.
-    let [reach_lo, reach_hi] = shape.reach;
-    let inside = fit.ks.iter().all(|&k| {
-        let u = r * (k - start);
-        u <= 0.0 || u >= 1.0 || (reach_lo..=reach_hi).contains(&u)
-    });
     let table = fit.flank_table(p);
     let noise = fit.noise;
     let sigma2 = noise * noise + table * table;
+    // The flank samples read and unread as the fit read them, each unread one within the
+    // force its end interval spans (0 to the force at the reach's end) or the model's.
+    let again = fit.read_at(p);
+    let inside = again.read == fit.read && again.ks == fit.ks && {
+        let [lo, hi] = shape.reach;
+        let edge = shape.at(lo).0.max(shape.at(hi).0);
+        let slack = 4.0 * libm::sqrtf(sigma2);
+        let start = fit.start(p);
+        let unread = fit.ks.iter().zip(&fit.ys).skip(fit.read);
+        unread.into_iter().all(|(&k, &y)| {
+            let u = r * (k - start);
+            let g = if u > 0.0 && u < 1.0 {
+                shape.at(u).0
+            } else {
+                0.0
+            };
+            y >= -slack && y <= peak * edge.max(g) + slack
+        })
+    };
     let (first, last) = fit.clipped();
     let edge = fit.model(p, first).0.min(fit.model(p, last).0);
     let level = level - fit.chain.level_error * peak;
@@ -405,16 +449,12 @@ fn accepted(
     };
     let row = fit.weighted(p)?.sum_row(p)?;
     // Three unknowns: at least four rows that see the pulse, or the residual tests nothing.
-    let seen = fit
-        .ks
-        .iter()
-        .filter(|&&k| felt(r * (k - at)).0 > 0.0)
-        .count()
-        + usize::from(row[0] != 0.0);
-    if seen < 4 {
+    let (ks, ys) = fit.read();
+    let seen = ks.iter().filter(|&&k| felt(r * (k - at)).0 > 0.0).count();
+    if seen + usize::from(row[0] != 0.0) < 4 {
         return None;
     }
-    let (_, inv, _) = gauss_newton_of(&fit.ks, &fit.ys, p, felt, &[row])?;
+    let (_, inv, _) = gauss_newton_of(ks, ys, p, felt, &[row])?;
     let fit = FlankFit {
         peak,
         peak_at: at,
@@ -429,7 +469,8 @@ fn in_end_interval(u: f32) -> bool {
     u > 0.0 && u < 1.0 && !(SHAPE_STEP..=1.0 - SHAPE_STEP).contains(&u)
 }
 
-/// What [`shape_flank_fit`] fits: the four flank samples `ys` at `ks`, the sum `rest` of the
+/// What [`shape_flank_fit`] fits: the four flank samples `ys` at `ks` (the first `read` of
+/// them read, [`ShapeFit::read_at`]), the sum `rest` of the
 /// pulse's other `rest_samples` samples (counts; the flank samples and the run's taken off),
 /// the run's length, what the chain did to the samples ([`FlankChain`]), the contact's table, the sensor's noise
 /// RMS (counts) and the weight of the sum's row against one flank sample.
@@ -437,6 +478,7 @@ fn in_end_interval(u: f32) -> bool {
 struct ShapeFit<'a> {
     ks: [f32; 4],
     ys: [f32; 4],
+    read: usize,
     rest: f32,
     rest_samples: f32,
     run: f32,
@@ -455,6 +497,45 @@ impl ShapeFit<'_> {
         (first, first + self.run - 1.0 - 2.0 * guard)
     }
 
+    /// The flank samples the fit reads, `(ks, ys)`: the first `read` ([`Self::read_at`]).
+    fn read(&self) -> (&[f32], &[f32]) {
+        let n = self.read;
+        (
+            self.ks.get(..n).unwrap_or(&[]),
+            self.ys.get(..n).unwrap_or(&[]),
+        )
+    }
+
+    /// The fit with its flank samples ordered as read at `p`: first those outside the
+    /// contact (the force 0) or within the table's reach, then those inside the contact in
+    /// an end interval the reach leaves out (where the table's error is not bounded), which
+    /// it does not read, nor any it did not read before (so that a sample on an interval's
+    /// edge does not flip between readings).
+    fn read_at(&self, p: [f32; 3]) -> Self {
+        let (start, r) = (self.start(p), p[2]);
+        let [lo, hi] = self.shape.reach;
+        let was_read = self.read().0;
+        let unread = |k: f32| {
+            let u = r * (k - start);
+            (u > 0.0 && u < lo) || (u > hi && u < 1.0) || !was_read.contains(&k)
+        };
+        let mut out = ShapeFit { read: 0, ..*self };
+        let mut n = 0;
+        for later in [false, true] {
+            let pairs = self.ks.iter().zip(&self.ys);
+            for (&k, &y) in pairs.filter(|&(&k, _)| unread(k) == later) {
+                if let (Some(ko), Some(yo)) = (out.ks.get_mut(n), out.ys.get_mut(n)) {
+                    (*ko, *yo) = (k, y);
+                }
+                n += 1;
+            }
+            if !later {
+                out.read = n;
+            }
+        }
+        out
+    }
+
     /// The contact's start at `p = [F_peak, k_peak, r]` (samples): `k_peak - u_peak / r`.
     fn start(&self, [_, at, r]: [f32; 3]) -> f32 {
         at - self.shape.peak_at / r
@@ -471,7 +552,11 @@ impl ShapeFit<'_> {
     fn flank_table(&self, p: [f32; 3]) -> f32 {
         let [peak, _, r] = p;
         let start = self.start(p);
-        let at_end = self.ks.iter().any(|&k| in_end_interval(r * (k - start)));
+        let at_end = self
+            .read()
+            .0
+            .iter()
+            .any(|&k| in_end_interval(r * (k - start)));
         let [inner, ends] = self.shape.error;
         (if at_end { ends } else { inner } + self.own_error(p)) * peak
     }
@@ -483,7 +568,7 @@ impl ShapeFit<'_> {
         let end = start + 1.0 / p[2];
         let near = |k: f32| (k - start).abs() <= KINK_SAMPLES || (k - end).abs() <= KINK_SAMPLES;
         let [body, ends] = self.chain.sample_error;
-        if self.ks.iter().any(|&k| near(k)) {
+        if self.read().0.iter().any(|&k| near(k)) {
             ends
         } else {
             body
@@ -564,7 +649,8 @@ impl ShapeFit<'_> {
 
     /// The residual sum of squares at `p`: the four samples' and the weighted sum row's.
     fn rss(&self, p: [f32; 3]) -> Option<f32> {
-        let flanks = self.ks.iter().zip(&self.ys).fold(0.0, |a, (&k, &y)| {
+        let (ks, ys) = self.read();
+        let flanks = ks.iter().zip(ys).fold(0.0, |a, (&k, &y)| {
             let e = y - self.model(p, k).0;
             a + e * e
         });
