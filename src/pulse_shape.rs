@@ -389,12 +389,11 @@ fn descend(
 /// shape, with its sigmas from the normal equations at `p` ([`ShapeFit::weighted`]): `None`
 /// for flank samples read otherwise than the fit read them ([`ShapeFit::read_at`]), an unread
 /// one beyond the force its end interval spans (4 noise RMS outside 0 to the force at the
-/// reach's end or the model's), `r` at the end of
-/// its `range`, the fitted pulse below the `level` where the first and the last clipped
-/// sample saw it (`ShapeFit::clipped`; less four times the noise RMS of a flank sample, the
-/// sensor's with the table's and the samples' own error, and the chain's
-/// `FlankChain::level_error` times `F_peak`), their
-/// residual `rss` with the sum row's above `8 x` that RMS, or fewer than four rows that see
+/// reach's end or the model's), `r` at the end of its `range`, the fitted pulse below the
+/// `level` where the first and the last clipped sample saw it (`ShapeFit::clipped`; less four
+/// times the noise RMS of a flank sample, the sensor's with the table's and the samples' own
+/// error, and the chain's `FlankChain::level_error` times `F_peak`), their residual `rss`
+/// with the sum row's above `8 x` that RMS, or fewer than four rows that see
 /// the pulse (a flank sample whose force is below its noise RMS does not: at the contact's
 /// start the fit sits on the kink between no force and the steep flank; a pulse that rises
 /// from no force past the level within one sample leaves three, and nothing would test the
