@@ -36,16 +36,25 @@
 //!   more consecutive samples equal to the pulse's largest one, on a sensor with at least one
 //!   count of noise, is a clipped top: `Saturated`.
 //! - Clipped at the ADC's full scale (on a rigid chain, or with the feature `pulse_shape`
-//!   behind an accelerometer alone): the two samples before the first clipped one and the
-//!   two after the last give `F_max` and `t_c` by the least-squares fit of the Hertz shape to
-//!   them ([`flank_fit`], `Detector::measure_clipped`), or of a damped contact's own
+//!   behind an accelerometer, and with `settle` too behind beam modes): the two samples
+//!   before the first clipped one and the two after the last give `F_max` and `t_c` by the
+//!   least-squares fit of the Hertz shape to them ([`flank_fit`],
+//!   `Detector::measure_clipped`), or of a damped contact's own
 //!   tabulated shape (`Settings::pulse_shape`, `crate::pulse_shape::shape_flank_fit`), with
 //!   their sigmas from the fit. Behind an accelerometer the flank samples lie beyond the
 //!   equaliser's delay either side of the clipped ones (its FIR read a clipped sample into
 //!   those), and each carries the equaliser's own error at the pulse's length
-//!   ([`crate::chain_residual::sample_error`]). A pulse whose flanks are too short, whose
-//!   contact's shape the scene does not carry, that the fit does not describe, or that rang
-//!   through beam modes stays `Saturated`.
+//!   ([`crate::chain_residual::sample_error`]). Behind beam modes the run leaves the
+//!   sections' state off the chain's, and that error rings under the samples after it: the
+//!   pulse waits, its report deferred, for the re-estimation that follows it
+//!   (`crate::settle_clip`), whose fit states the error and its variance at the two samples
+//!   after the run and in the pulse's sum; the level at which the force clipped is the
+//!   sample before the run plus the raw headroom it left over the modes' gain above their
+//!   band (`1 + sum g_j`), less a slow part bounded by `sum g_j w_j^2` over the run; ringing
+//!   seen before the pulse counts at every flank sample and, with one sign, in the sum. A
+//!   pulse whose flanks are too short, whose contact's shape the scene does not carry, that
+//!   the fit does not describe, or whose re-estimation is not believed (a pulse or a sample
+//!   at full scale inside its window) stays `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the level a sample above it must pass to
@@ -169,6 +178,28 @@ enum State {
 #[cfg(feature = "pulse_shape")]
 type Clip = (i32, i32, u8);
 
+/// A clipped pulse behind beam modes, waiting for the equaliser's state re-estimation to
+/// state what the sections' state, left off by the run, put into its samples after it
+/// ([`crate::settle_clip`]; features `pulse_shape` and `settle`). Indices are the
+/// detector's sample indices.
+#[cfg(all(feature = "pulse_shape", feature = "settle"))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PendingClip {
+    /// The pulse as the flank fit reads it, before the correction.
+    flanks: Flanks,
+    /// The run's first sample.
+    first: u64,
+    /// The first sample past the run and the samples the FIR took from it.
+    anchor: u64,
+    /// The sample after the pulse's last.
+    end: u64,
+    /// The pulse's largest sample, where a refusal is reported.
+    max_at: u64,
+    /// What the pre-trigger samples carried beyond the noise (counts RMS, `Pulse::excess`):
+    /// ringing that an earlier clipped impact left, slow against the pulse.
+    excess: f32,
+}
+
 /// Running sums of the pulse being cut.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -205,6 +236,14 @@ struct Pulse {
     clip_at: u64,
     #[cfg(feature = "pulse_shape")]
     run_sum: f32,
+    /// The index of the last sample at full scale.
+    #[cfg(feature = "pulse_shape")]
+    last_clip_at: u64,
+    /// The last raw sample, and the one before the first at full scale.
+    #[cfg(feature = "pulse_shape")]
+    raw_last: i32,
+    #[cfg(feature = "pulse_shape")]
+    raw_before_clip: i32,
     last: f32,
     valley: f32,
     above_trigger: u32,
@@ -253,6 +292,12 @@ impl Pulse {
         clip_at: 0,
         #[cfg(feature = "pulse_shape")]
         run_sum: 0.0,
+        #[cfg(feature = "pulse_shape")]
+        last_clip_at: 0,
+        #[cfg(feature = "pulse_shape")]
+        raw_last: 0,
+        #[cfg(feature = "pulse_shape")]
+        raw_before_clip: 0,
         last: 0.0,
         valley: 0.0,
         above_trigger: 0,
@@ -323,11 +368,13 @@ impl Pulse {
         if sample >= adc_max {
             if self.clipped == 0 {
                 (self.before_clip, self.clip_at) = ([older, self.prev], index);
+                self.raw_before_clip = self.raw_last;
             }
             self.saturated = true;
             self.clipped = self.clipped.saturating_add(1);
             self.after_clip_count = 0;
             self.run_sum += v;
+            self.last_clip_at = index;
         } else if sample <= adc_min {
             self.saturated = true;
             self.low_clip = true;
@@ -343,6 +390,7 @@ impl Pulse {
             }
             self.after_clip_count = count.saturating_add(1);
         }
+        self.raw_last = sample;
     }
 
     /// Runs at the largest raw sample (a clipped top is flat in what the ADC gave): the
@@ -501,6 +549,20 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// raw samples' ([`crate::chain_residual::raw_error`]); zeros on a rigid chain.
     #[cfg(feature = "pulse_shape")]
     clip_errors: [[f32; CLIP_ERROR_POINTS]; 3],
+    /// The chain has beam modes: a clipped pulse waits for the sections' state error
+    /// (`pending`).
+    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+    behind_modes: bool,
+    /// Behind beam modes, their gain above their band, `1 + sum_j g_j`, and how fast the
+    /// raw top may part from that times the force, `sum_j g_j w_j^2 / (1 + sum_j g_j)`
+    /// (`w_j` in radians per sample).
+    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+    mode_gain: f32,
+    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+    mode_slow: f32,
+    /// A clipped pulse waiting for the re-estimation after it.
+    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+    pending: Option<PendingClip>,
     dt_s: f32,
     force_per_count_n: f32,
     baseline: f32,
@@ -543,6 +605,8 @@ impl<M: Backend> Detector<M> {
             a.damping_ratio * fs / (core::f32::consts::PI * a.frequency_hz)
         });
         let modes = sensor.dynamics.modes();
+        #[cfg(feature = "pulse_shape")]
+        let pulse_shape = clip_shape(s, modes.is_empty() || cfg!(feature = "settle"));
         let mut ring_omegas = [0.0; crate::equaliser::MAX_MODES];
         for (w, mode) in ring_omegas.iter_mut().zip(modes) {
             *w = core::f32::consts::TAU * mode.frequency_hz / fs;
@@ -562,7 +626,9 @@ impl<M: Backend> Detector<M> {
             hertz,
             sampling_calibrated: s.corrects_sampling(),
             #[cfg(feature = "pulse_shape")]
-            pulse_shape: clip_shape(s, modes.is_empty()),
+            clip_errors: clip_errors(scene, clip_lag, pulse_shape.is_some()),
+            #[cfg(feature = "pulse_shape")]
+            pulse_shape,
             hold,
             max_samples,
             alpha: 1.0 - M::exp(-1.0 / (s.baseline_tau_s * fs)),
@@ -579,8 +645,19 @@ impl<M: Backend> Detector<M> {
             guard2: (2 * scene.equaliser().delay_samples()).min(8) as u8,
             #[cfg(feature = "pulse_shape")]
             clip_lag,
-            #[cfg(feature = "pulse_shape")]
-            clip_errors: clip_errors(scene, clip_lag),
+            #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+            behind_modes: !modes.is_empty(),
+            #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+            mode_gain: 1.0 + modes.iter().map(|m| m.gain).sum::<f32>(),
+            #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+            mode_slow: modes
+                .iter()
+                .zip(&ring_omegas)
+                .map(|(m, w)| m.gain * w * w)
+                .sum::<f32>()
+                / (1.0 + modes.iter().map(|m| m.gain).sum::<f32>()),
+            #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+            pending: None,
             dt_s: 1.0 / fs,
             force_per_count_n: sensor.force_per_count_n,
             baseline: 0.0,
@@ -642,6 +719,19 @@ impl<M: Backend> Detector<M> {
     /// else is measured on it). [`Detector::feed`] is `feed_value(s, s as f32)`.
     #[inline(always)]
     pub fn feed_value(&mut self, sample: i32, value: f32) -> Option<Detection> {
+        // A clipped pulse still waiting when the detector is fed again: the re-estimation
+        // never ran (a sample at full scale came first, which cannot also end a pulse).
+        #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+        if self.pending.is_some() {
+            let waited = self.resolve_clip(None);
+            return waited.or(self.feed_now(sample, value));
+        }
+        self.feed_now(sample, value)
+    }
+
+    /// [`Detector::feed_value`] with no clipped pulse waiting.
+    #[inline(always)]
+    fn feed_now(&mut self, sample: i32, value: f32) -> Option<Detection> {
         let index = self.next_index;
         self.next_index = index.wrapping_add(1);
         let stuck = if sample == self.previous {
@@ -865,7 +955,7 @@ impl<M: Backend> Detector<M> {
             }
             State::Idle => {
                 self.state = State::Resumed;
-                None
+                self.unsettled_clip()
             }
             State::Recovering(_) | State::Resumed | State::Unprimed => None,
         }
@@ -902,7 +992,7 @@ impl<M: Backend> Detector<M> {
                 self.pre_start = self.pre_next;
                 Some(self.reject(RejectReason::Truncated))
             }
-            _ => None,
+            _ => self.unsettled_clip(),
         }
     }
 
@@ -1109,6 +1199,11 @@ impl<M: Backend> Detector<M> {
         if p.below_release >= self.hold {
             self.state = State::Idle;
             self.pre_start = self.pre_next;
+            #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+            if let Some(pending) = self.clip_to_settle(index) {
+                self.pending = Some(pending);
+                return None;
+            }
             return Some(self.measure());
         }
         if p.samples > self.max_samples {
@@ -1434,22 +1529,33 @@ impl<M: Backend> Detector<M> {
     #[cold]
     #[inline(never)]
     fn measure_clipped(&self) -> Detection {
-        let p = &self.pulse;
         let reject = Detection::Pulse {
-            at_sample: p.max_at,
+            at_sample: self.pulse.max_at,
             outcome: Err(RejectReason::Saturated),
         };
-        let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
-        let (flanks, first) = self.flanks();
-        let after = p.after_clip_count >= 2 + self.guard2();
-        if !(whole && self.flanks_readable() && after && p.clipped == p.flat) {
+        if !self.clip_measurable() {
             return reject;
         }
-        let Some((fit, noise2, floor2)) = self.fit_flanks(&flanks) else {
-            return reject;
-        };
+        let (flanks, first) = self.flanks();
+        self.flank_detection(&flanks, first).unwrap_or(reject)
+    }
+
+    /// Whether the finished pulse's clipped samples are one run at its top, with its whole
+    /// flanks (no gap, second impact, drift or low clip) and two samples after the run past
+    /// the FIR's guard, behind a chain whose flanks can be read.
+    fn clip_measurable(&self) -> bool {
+        let p = &self.pulse;
+        let whole = !(p.low_clip || p.after_gap || p.pileup || p.drift);
+        let after = p.after_clip_count >= 2 + self.guard2();
+        whole && self.flanks_readable() && after && p.clipped == p.flat
+    }
+
+    /// The measurement of a clipped pulse by the fit of its `flanks` (`first`: the index of
+    /// its run's first sample); `None` when the fit fails.
+    fn flank_detection(&self, flanks: &Flanks, first: u64) -> Option<Detection> {
+        let (fit, noise2, floor2) = self.fit_flanks(flanks)?;
         let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
-        Detection::Pulse {
+        Some(Detection::Pulse {
             // The sample nearest the fitted peak (within the run; through u32, which the FPU
             // converts, where a u64 would call a library routine).
             at_sample: first + u64::from((fit.peak_at + 0.5).max(0.0) as u32),
@@ -1464,7 +1570,83 @@ impl<M: Backend> Detector<M> {
                 #[cfg(feature = "pulse_shape")]
                 from_flanks: true,
             }),
+        })
+    }
+
+    /// Behind beam modes, the finished pulse (its last sample `index`) as a clipped pulse to
+    /// wait for the sections' state error, when its flanks can be read.
+    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+    fn clip_to_settle(&self, index: u64) -> Option<PendingClip> {
+        let p = &self.pulse;
+        if !(self.behind_modes && p.saturated && self.clip_measurable()) {
+            return None;
         }
+        let (flanks, first) = self.flanks();
+        Some(PendingClip {
+            flanks,
+            first,
+            anchor: p.last_clip_at + 1 + u64::from(self.guard2),
+            end: index + 1,
+            max_at: p.max_at,
+            excess: p.excess,
+        })
+    }
+
+    /// Where a clipped pulse waiting for the sections' state error lies from its anchor,
+    /// counted to the next sample ([`crate::settle::Settler::start_anchored`]).
+    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+    pub(crate) fn clip_anchor(&self) -> Option<crate::settle_clip::ClipAnchor> {
+        let c = self.pending.as_ref()?;
+        let count = |from: u64, to: u64| u32::try_from(to.saturating_sub(from)).unwrap_or(u32::MAX);
+        Some(crate::settle_clip::ClipAnchor {
+            to_window: count(c.anchor, self.next_index),
+            in_pulse: count(c.anchor, c.end),
+        })
+    }
+
+    /// The clipped pulse waiting for the sections' state error, measured with `error` taken
+    /// off its samples after the run (their sigmas joining the flank fit's,
+    /// [`FlankChain::state_error`]), or `Saturated` without it (the re-estimation was not
+    /// believed) or when the fit fails; `None` when no pulse waits.
+    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+    pub(crate) fn resolve_clip(
+        &mut self,
+        error: Option<crate::settle_clip::ClipError>,
+    ) -> Option<Detection> {
+        let c = self.pending.take()?;
+        let reject = Detection::Pulse {
+            at_sample: c.max_at,
+            outcome: Err(RejectReason::Saturated),
+        };
+        let Some(e) = error else {
+            return Some(reject);
+        };
+        let [a0, a1] = c.flanks.after;
+        let [v0, v1, v_sum] = e.variance;
+        // Ringing seen before the pulse goes on through it, slow against it: at each flank
+        // sample, and with one sign over the sum's samples.
+        let ring = c.excess;
+        let flanks = Flanks {
+            after: [a0 - e.after[0], a1 - e.after[1]],
+            sum: c.flanks.sum - e.sum,
+            chain: FlankChain {
+                state_error: [
+                    M::sqrt(v0.max(v1) + ring * ring),
+                    M::sqrt(v_sum) + ring * c.flanks.samples,
+                ],
+                ..c.flanks.chain
+            },
+            ..c.flanks
+        };
+        Some(self.flank_detection(&flanks, c.first).unwrap_or(reject))
+    }
+
+    /// A clipped pulse still waiting when the stream ends or breaks: `Saturated`.
+    fn unsettled_clip(&mut self) -> Option<Detection> {
+        #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+        return self.resolve_clip(None);
+        #[cfg(not(all(feature = "pulse_shape", feature = "settle")))]
+        None
     }
 
     /// The clipped pulse as the flank fits read it, and the index of its run's first sample:
@@ -1497,7 +1679,7 @@ impl<M: Backend> Detector<M> {
             before: p.before_clip,
             run: p.clipped as f32 + guard2,
             after: p.after_clip,
-            level: self.adc_max as f32 - self.baseline,
+            level: self.clip_level(),
             sum: p.sum,
             samples: p.samples as f32,
             run_sum: p.run_sum,
@@ -1522,9 +1704,34 @@ impl<M: Backend> Detector<M> {
             .map(|e| crate::math::interpolate(&e, position));
         FlankChain {
             sample_error: [body, ends],
-            level_error: raw,
+            level_error: raw + self.mode_slow() * flanks.run * (flanks.run + t_c),
             ..flanks.chain
         }
+    }
+
+    /// The force (counts over the baseline) at which the ADC clips: its full scale, or behind
+    /// beam modes (feature `settle`), whose raw top is `(1 + sum g_j)` times the force less a
+    /// slow part, the sample before the run plus the raw headroom it left over that gain.
+    #[cfg(feature = "pulse_shape")]
+    fn clip_level(&self) -> f32 {
+        #[cfg(feature = "settle")]
+        if self.behind_modes {
+            let p = &self.pulse;
+            let headroom = self.adc_max as f32 - p.raw_before_clip as f32;
+            return p.before_clip[1] + headroom / self.mode_gain;
+        }
+        self.adc_max as f32 - self.baseline
+    }
+
+    /// How far, over the peak, the raw top behind beam modes parts from `(1 + sum g_j)`
+    /// times the force per sample of the run and of the pulse (`sum g_j w_j^2 / (1 + sum
+    /// g_j)`, `w_j` per sample); 0 elsewhere.
+    #[cfg(feature = "pulse_shape")]
+    fn mode_slow(&self) -> f32 {
+        #[cfg(feature = "settle")]
+        return self.mode_slow;
+        #[cfg(not(feature = "settle"))]
+        0.0
     }
 
     /// Samples after a clipped run that the equaliser's FIR took from a clipped one (twice
@@ -1535,6 +1742,15 @@ impl<M: Backend> Detector<M> {
         return self.guard2;
         #[cfg(not(feature = "pulse_shape"))]
         0
+    }
+
+    /// Whether a clipped pulse waits for the sections' state error (beam modes, with the
+    /// features `pulse_shape` and `settle`).
+    fn behind_modes(&self) -> bool {
+        #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+        return self.behind_modes;
+        #[cfg(not(all(feature = "pulse_shape", feature = "settle")))]
+        false
     }
 
     /// Whether the chain lets the flanks of a clipped pulse be read: a rigid one, or with
@@ -1560,7 +1776,7 @@ impl<M: Backend> Detector<M> {
     /// `None` for any other contact, or when the fit fails.
     fn fit_flanks(&self, flanks: &Flanks) -> Option<(FlankFit, f32, f32)> {
         let noise2 = self.noise * self.noise;
-        if self.hertz && self.guard2() == 0 {
+        if self.hertz && self.guard2() == 0 && !self.behind_modes() {
             if let Some(fit) = flank_fit(flanks, self.noise) {
                 return Some((fit, noise2, FLANK_FLOOR * FLANK_FLOOR));
             }
@@ -1568,21 +1784,26 @@ impl<M: Backend> Detector<M> {
         #[cfg(feature = "pulse_shape")]
         if self.pulse_shape.is_some() {
             let shape = &self.pulse_shape;
-            // Behind an accelerometer, first with the chain's errors at the shortest pulse
-            // the fit allows (`run + 3` samples), then at the fitted one.
-            let first = Flanks {
-                chain: self.clip_chain(flanks, flanks.run + 3.0),
-                ..*flanks
+            // Behind a chain, first with its errors at the shortest pulse the fit allows
+            // (`run + 3` samples), then at the fitted one.
+            let rigid = flanks.chain == FlankChain::RIGID;
+            let first = match rigid {
+                true => *flanks,
+                false => Flanks {
+                    chain: self.clip_chain(flanks, flanks.run + 3.0),
+                    ..*flanks
+                },
             };
             let (mut fit, mut table) = shape_flank_fit(&first, self.noise, shape)?;
-            if flanks.chain != FlankChain::RIGID {
+            if !rigid {
                 let flanks = Flanks {
                     chain: self.clip_chain(flanks, fit.duration * C_AREA / shape.area),
                     ..*flanks
                 };
                 (fit, table) = shape_flank_fit(&flanks, self.noise, shape)?;
             }
-            return Some((fit, noise2 + table * table, 0.0));
+            let variance = noise2 + table * table + flanks.chain.state_variance();
+            return Some((fit, variance, 0.0));
         }
         None
     }
@@ -1605,26 +1826,35 @@ fn clip_error_n(k: usize) -> f32 {
 }
 
 /// The equaliser's error per sample of a pulse over its peak at [`clip_error_n`] samples per
-/// pulse, which a clipped pulse's flank fit counts beside the noise behind an accelerometer
-/// (the sample before the run, and after it, read the force through the equaliser); zeros
-/// on a rigid chain or where no flank fit is made.
+/// pulse, which a clipped pulse's flank fit counts beside the noise behind a chain (the
+/// sample before the run, and after it, read the force through the equaliser); zeros on a
+/// rigid chain, behind beam modes without the feature `settle`, and where no flank fit is
+/// made (`read` false: the scene carries no shape for the contact).
 #[cfg(feature = "pulse_shape")]
 #[inline(never)]
 fn clip_errors<const N: usize, M: Backend>(
     scene: &Scene<N, M>,
     lag: f32,
+    read: bool,
 ) -> [[f32; CLIP_ERROR_POINTS]; 3] {
     let design = scene.equaliser();
     let sensor = scene.sensor();
     let mut out = [[0.0; CLIP_ERROR_POINTS]; 3];
-    if design.is_identity() || !sensor.dynamics.modes().is_empty() {
+    let modes = !sensor.dynamics.modes().is_empty();
+    if !read || design.is_identity() || (modes && !cfg!(feature = "settle")) {
         return out;
     }
     let (dynamics, fs) = (&sensor.dynamics, sensor.sample_rate_hz);
+    // The raw top's own part from beam modes is the detector's (`Detector::clip_level`):
+    // the accelerometer's alone here.
+    let band = match dynamics.accelerometer() {
+        Some(a) => crate::equaliser::ChainDynamics::RIGID.with_accelerometer(a),
+        None => crate::equaliser::ChainDynamics::RIGID,
+    };
     for k in 0..CLIP_ERROR_POINTS {
         let n = clip_error_n(k);
         let [body, ends] = crate::chain_residual::sample_error(dynamics, design, fs, n);
-        let raw = crate::chain_residual::raw_error(dynamics, fs, n, lag);
+        let raw = crate::chain_residual::raw_error(&band, fs, n, lag);
         for (table, e) in out.iter_mut().zip([body, ends, raw]) {
             if let Some(slot) = table.get_mut(k) {
                 *slot = e;

@@ -33,6 +33,8 @@ pub mod scene;
 #[cfg(feature = "serde")]
 pub mod settings_serde;
 pub mod settle;
+#[cfg(all(feature = "settle", feature = "pulse_shape"))]
+pub mod settle_clip;
 pub mod shape_fit;
 pub mod thornton;
 

@@ -130,12 +130,20 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         let d = if self.equaliser.design().is_identity() {
             self.detector.feed(sample)?
         } else {
-            if self.settling(sample) && self.settle_slice(&[sample]) == 1 {
-                return None;
+            let mut settled = None;
+            if self.settling(sample) {
+                let (used, d) = self.settle_slice(&[sample]);
+                if used == 1 {
+                    return d.map(|d| self.handle(d));
+                }
+                settled = d;
             }
             self.watch_full_scale(sample);
             let value = self.equaliser.step(sample);
-            self.detector.feed_value(sample, value)?
+            // A clipped pulse resolved as its window ended at this sample (at full scale,
+            // which starts a pulse and cannot end one).
+            let fed = self.detector.feed_value(sample, value);
+            settled.or(fed)?
         };
         Some(self.handle(d))
     }
@@ -187,7 +195,13 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
                 if !self.settling(first.into()) {
                     break;
                 }
-                let used = self.settle_slice(rest);
+                let (used, settled) = self.settle_slice(rest);
+                if let Some(d) = settled {
+                    on_event(self.handle(d));
+                    if let Some(e) = self.take_flow_event() {
+                        on_event(e);
+                    }
+                }
                 if used == 0 {
                     break;
                 }
@@ -253,7 +267,14 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
     #[inline(always)]
     fn settling(&mut self, next: i32) -> bool {
         if self.settler.is_armed() && self.detector.is_idle() && !self.full_scale(next) {
-            self.settler.start(self.detector.baseline());
+            let baseline = self.detector.baseline();
+            #[cfg(all(feature = "settle", feature = "pulse_shape"))]
+            if let Some(anchor) = self.detector.clip_anchor() {
+                let design = *self.equaliser.design();
+                self.settler.start_anchored(baseline, &design, anchor);
+                return self.settler.in_window();
+            }
+            self.settler.start(baseline);
         }
         self.settler.in_window()
     }
@@ -279,10 +300,11 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
 
     /// Feeds the front of `samples` to the open window of the re-estimation
     /// ([`Settler::run`]) and tells the detector and the counters what it took. Returns how
-    /// many samples it took.
+    /// many samples it took and, when the window ended (believed, discarded, or at a sample
+    /// at full scale), the measurement of a clipped pulse that waited for it.
     #[cold]
     #[inline(never)]
-    fn settle_slice<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> usize {
+    fn settle_slice<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> (usize, Option<Detection>) {
         let sensor = self.scene.sensor();
         let adc = (sensor.adc_min, sensor.adc_max);
         let mut raw = samples.iter().map(|&s| s.into());
@@ -294,7 +316,14 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
             c.settled = c.settled.saturating_add(1);
         }
         c.settle_samples = c.settle_samples.saturating_add(taken.samples as u64);
-        taken.samples as usize
+        #[cfg(all(feature = "settle", feature = "pulse_shape"))]
+        if !self.settler.in_window() {
+            return (
+                taken.samples as usize,
+                self.detector.resolve_clip(taken.clip),
+            );
+        }
+        (taken.samples as usize, None)
     }
 
     /// Brings the counters the detector keeps (samples, stuck runs) into `counters`.

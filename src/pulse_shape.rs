@@ -391,8 +391,8 @@ fn descend(
 /// one beyond the force its end interval spans (4 noise RMS outside 0 to the force at the
 /// reach's end or the model's), `r` at the end of its `range`, the fitted pulse below the
 /// `level` where the first and the last clipped sample saw it (`ShapeFit::clipped`; less four
-/// times the noise RMS of a flank sample, the sensor's with the table's and the samples' own
-/// error, and the chain's `FlankChain::level_error` times `F_peak`), their residual `rss`
+/// times the noise RMS of a flank sample, the sensor's with the table's, the samples' own
+/// error and the sections' state error (`FlankChain::state_error`), and the chain's `FlankChain::level_error` times `F_peak`), their residual `rss`
 /// with the sum row's above `8 x` that RMS, or fewer than four rows that see
 /// the pulse (a flank sample whose force is below its noise RMS does not: at the contact's
 /// start the fit sits on the kink between no force and the steep flank; a pulse that rises
@@ -409,7 +409,7 @@ fn accepted(
     let shape = fit.shape;
     let table = fit.flank_table(p);
     let noise = fit.noise;
-    let sigma2 = noise * noise + table * table;
+    let sigma2 = noise * noise + table * table + fit.chain.state_variance();
     // The flank samples read and unread as the fit read them, each unread one within the
     // force its end interval spans (0 to the force at the reach's end) or the model's.
     let again = fit.read_at(p);
@@ -578,7 +578,8 @@ impl ShapeFit<'_> {
     /// noise (the sensor's with [`Self::flank_table`]) over the sum's ([`Self::sum_sigma`]).
     fn weighted(&self, p: [f32; 3]) -> Option<Self> {
         let table = self.flank_table(p);
-        let flank = libm::sqrtf(self.noise * self.noise + table * table);
+        let flank =
+            libm::sqrtf(self.noise * self.noise + table * table + self.chain.state_variance());
         Some(ShapeFit {
             sum_weight: flank / self.sum_sigma(p)?,
             ..*self
@@ -642,7 +643,8 @@ impl ShapeFit<'_> {
             a + if end { ends } else { inner } * peak
         });
         let n = self.rest_samples.max(0.0);
-        let sigma = libm::sqrtf(n * self.noise * self.noise + table * table);
+        let state = self.chain.state_error[1];
+        let sigma = libm::sqrtf(n * self.noise * self.noise + table * table + state * state);
         (sigma > 0.0 && sigma.is_finite()).then_some(sigma)
     }
 

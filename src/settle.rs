@@ -36,8 +36,13 @@
 //! starts it again). Every sample spent here is counted (`Counters::settle_samples`), and the
 //! detector is told of them: it searches none of them for pulses.
 //!
+//! **A clipped pulse behind beam modes** (with the feature `pulse_shape`) waits for the window
+//! after it: `Settler::start_anchored` starts the shadows at the pulse's anchor, so that the
+//! fit's `d` is the state error there and also states the error in that pulse's own samples
+//! after the run (`crate::settle_clip`).
+//!
 //! **Cost.** Behind a rigid chain nothing arms it. It is the cargo feature `settle` (on by
-//! default): on a Cortex-M4F 2.4 KB of flash on a size-optimised node with one math backend
+//! default): on a Cortex-M4F 2.5 KB of flash on a size-optimised node with one math backend
 //! (5.0 KB on the measuring node, which carries both) and 600 B of RAM in every
 //! [`crate::Monitor`]; without it a monitor carries [`NoSettle`], which takes no sample, and
 //! an equaliser left off the chain's state rings until its own damping ends it.
@@ -45,6 +50,8 @@
 use crate::equaliser::{Equaliser, MAX_MODES};
 #[cfg(feature = "settle")]
 use crate::equaliser::{EqualiserDesign, SectionStates};
+#[cfg(all(feature = "settle", feature = "pulse_shape"))]
+use crate::settle_clip::{ClipAnchor, ClipColumns, ClipError};
 
 /// Length of one window of the fit (s, after [`WARM_UP`]): long enough for a section at
 /// 170 Hz to turn by a fifth of a period, short enough that an impact seldom falls into it.
@@ -67,7 +74,7 @@ pub const RANK_TOLERANCE: f32 = 1e-4;
 
 /// Unknowns at most: two states per section.
 #[cfg(feature = "settle")]
-const UNKNOWNS: usize = 2 * MAX_MODES;
+pub(crate) const UNKNOWNS: usize = 2 * MAX_MODES;
 
 /// Where the re-estimation stands.
 #[cfg(feature = "settle")]
@@ -95,6 +102,9 @@ enum Settled {
         error: SectionStates,
         /// The residual mean square of the window (counts^2).
         quiet_ms: f32,
+        /// The error in the samples of the clipped pulse the window was anchored at.
+        #[cfg(feature = "pulse_shape")]
+        clip: Option<ClipError>,
     },
     /// The window was discarded; another starts (or, after [`MAX_WINDOWS`], none).
     Discarded,
@@ -110,6 +120,10 @@ pub struct Taken {
     pub last_raw: Option<i32>,
     /// With a believed fit: the residual mean square about the baseline (counts^2).
     pub quiet_ms: Option<f32>,
+    /// With a believed fit of a window anchored at a clipped pulse
+    /// (`Settler::start_anchored`): the error in that pulse's samples.
+    #[cfg(all(feature = "settle", feature = "pulse_shape"))]
+    pub clip: Option<ClipError>,
 }
 
 /// The observer: its phase, the shadow sections and the triangular least-squares system.
@@ -131,6 +145,9 @@ pub struct Settler {
     norm2: [f32; UNKNOWNS],
     /// Residual sum of squares so far (counts^2).
     rss: f32,
+    /// The columns at a clipped pulse's samples when the shadows started at its anchor.
+    #[cfg(feature = "pulse_shape")]
+    columns: Option<ClipColumns>,
 }
 
 #[cfg(feature = "settle")]
@@ -155,6 +172,8 @@ impl Settler {
             r: [[0.0; UNKNOWNS + 1]; UNKNOWNS],
             norm2: [0.0; UNKNOWNS],
             rss: 0.0,
+            #[cfg(feature = "pulse_shape")]
+            columns: None,
         }
     }
 
@@ -200,6 +219,18 @@ impl Settler {
         };
     }
 
+    /// Starts a window as [`Settler::start`] does, with its shadows started at the anchor of
+    /// a clipped pulse behind beam modes and run to the window's first sample
+    /// ([`ClipColumns::run_to_window`]): a believed fit then also states that pulse's error
+    /// (`Taken::clip`). Without columns (too far, too short) a plain window.
+    #[cfg(feature = "pulse_shape")]
+    pub fn start_anchored(&mut self, baseline: f32, design: &EqualiserDesign, anchor: ClipAnchor) {
+        self.start(baseline);
+        if self.in_window() {
+            self.columns = ClipColumns::run_to_window(design, anchor, &mut self.shadows);
+        }
+    }
+
     /// Runs the open window over `raw` samples (counts): each through `equaliser` and into
     /// the window's fit (`noise`: the equalised noise's RMS, counts), until the window
     /// closes or a sample reaches `adc` `(min, max)` (that one is not taken: it ends the
@@ -225,9 +256,18 @@ impl Settler {
             taken.last_raw = Some(sample);
             match self.take(equaliser.design(), value, noise) {
                 Settled::Pending => {}
-                Settled::Correct { error, quiet_ms } => {
+                Settled::Correct {
+                    error,
+                    quiet_ms,
+                    #[cfg(feature = "pulse_shape")]
+                    clip,
+                } => {
                     equaliser.correct_states(&error);
                     taken.quiet_ms = Some(quiet_ms);
+                    #[cfg(feature = "pulse_shape")]
+                    {
+                        taken.clip = clip;
+                    }
                 }
                 Settled::Discarded => break,
             }
@@ -243,7 +283,14 @@ impl Settler {
             return Settled::Pending;
         };
         let unknowns = 2 * design.section_count();
-        if n == WARM_UP {
+        if self.anchored() {
+            // The shadows run from the anchor: through the warm-up too.
+            if n < WARM_UP {
+                for shadow in self.shadows.iter_mut().take(unknowns) {
+                    design.free_step(shadow);
+                }
+            }
+        } else if n == WARM_UP {
             for (i, shadow) in self.shadows.iter_mut().enumerate().take(unknowns) {
                 if let Some(s) = shadow.get_mut(i / 2).and_then(|st| st.get_mut(i % 2)) {
                     *s = 1.0;
@@ -274,10 +321,24 @@ impl Settler {
             return Settled::Discarded;
         }
         self.phase = Phase::Off;
+        let d = self.solve(unknowns);
         Settled::Correct {
-            error: self.state_error(unknowns),
+            error: self.carried(&d, unknowns),
             quiet_ms,
+            #[cfg(feature = "pulse_shape")]
+            clip: self
+                .columns
+                .as_ref()
+                .and_then(|c| c.error(&d, &self.r, (&self.norm2, RANK_TOLERANCE, unknowns), noise)),
         }
+    }
+
+    /// Whether the shadows started at a clipped pulse's anchor.
+    fn anchored(&self) -> bool {
+        #[cfg(feature = "pulse_shape")]
+        return self.columns.is_some();
+        #[cfg(not(feature = "pulse_shape"))]
+        false
     }
 
     /// One row `(phi_1 .. phi_p, y)` into `R` and `z` by Givens rotations; what is left of `y`
@@ -295,9 +356,10 @@ impl Settler {
         self.rss += e * e;
     }
 
-    /// Back-substitution of `R d = z`, then `sum_i d_i` times shadow `i`'s state now.
+    /// Back-substitution of `R d = z`: the state error where the shadows started (a
+    /// direction `R` cannot tell from the others left at 0).
     #[inline(never)]
-    fn state_error(&self, unknowns: usize) -> SectionStates {
+    fn solve(&self, unknowns: usize) -> [f32; UNKNOWNS] {
         let mut d = [0.0_f32; UNKNOWNS];
         for i in (0..unknowns).rev() {
             let Some(ri) = self.r.get(i) else { continue };
@@ -315,6 +377,12 @@ impl Settler {
                 };
             }
         }
+        d
+    }
+
+    /// `sum_i d_i` times shadow `i`'s state now: the state error `d` carried to the window's
+    /// end.
+    fn carried(&self, d: &[f32; UNKNOWNS], unknowns: usize) -> SectionStates {
         let mut error = [[0.0; 2]; MAX_MODES];
         for (di, shadow) in d.iter().zip(&self.shadows).take(unknowns) {
             for (e, s) in error.iter_mut().zip(shadow) {

@@ -392,6 +392,11 @@ pub struct FlankChain {
     /// ([`crate::chain_residual::raw_error`]; an accelerometer with a resonant peak raises
     /// the pulse's top past the force's).
     pub level_error: f32,
+    /// Behind beam modes, the RMS of what the sections' state, left off by the run, puts
+    /// into a flank sample after it and into the pulse's sum, once taken off them
+    /// (`[sample, sum]`, counts: the sigmas of `settle_clip::ClipError`); zeros
+    /// elsewhere. The flank fit counts the first at every flank sample.
+    pub state_error: [f32; 2],
 }
 
 impl FlankChain {
@@ -401,7 +406,13 @@ impl FlankChain {
         lag: 0.0,
         sample_error: [0.0; 2],
         level_error: 0.0,
+        state_error: [0.0; 2],
     };
+
+    /// The variance a flank sample carries from [`FlankChain::state_error`] (counts^2).
+    pub fn state_variance(&self) -> f32 {
+        self.state_error[0] * self.state_error[0]
+    }
 }
 
 impl Flanks {
