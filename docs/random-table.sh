@@ -19,9 +19,9 @@
 # and is evaluated by `host-sim evaluate --json` (N impacts per class, seed SEED), JOBS at a
 # time, against the targets of docs/grid.md. Two causes are named where a row misses:
 #   saturated  more than 1 % of the impacts are rejected as saturated: clipped at the ADC's full
-#              scale and not measured from their flanks (on a rigid beam the kernel measures a
-#              clipped pulse of the Hertz law or a restitution-parametrised one from its flanks;
-#              behind a chain it is Saturated). The table also gives the share of the impacts the
+#              scale and not measured from their flanks (the kernel measures a clipped pulse
+#              of the Hertz law or a restitution-parametrised one from its flanks, on a rigid
+#              beam and behind a chain; one whose flanks it cannot read is Saturated). The table also gives the share of the impacts the
 #              scene build predicts at full scale (it warns above 1 %).
 #   faint  more than 5 % of the impacts peak below 10 times the force noise the detector sees
 #          (`evaluate`'s table "by peak over noise")
@@ -151,9 +151,9 @@ print("`host-sim evaluate --n %s --seed %s --json` and held to the targets of `d
 print("(forced choice within 1 pp of the reference limit beyond two standard errors, confident")
 print("errors at most 1 %, calibration within 2 pp beyond two standard errors in every bin of")
 print("at least 200 verdicts). *clipping* is the share of the impacts the scene build predicts at")
-print("the ADC's full scale, weighted by the classes' priors (it warns above 1 %); on a rigid beam the")
-print("kernel measures a clipped pulse of the Hertz law or of a restitution-parametrised one from its")
-print("flanks, and *saturated* is the share of the evaluated impacts (n per class, whatever the")
+print("the ADC's full scale, weighted by the classes' priors (it warns above 1 %); the kernel measures")
+print("a clipped pulse of the Hertz law or of a restitution-parametrised one from its flanks, on a")
+print("rigid beam and behind a chain, and *saturated* is the share of the evaluated impacts (n per class, whatever the")
 print("priors) it rejects as saturated. A row that misses names its causes: *saturated* (more than")
 print("1 % of the impacts rejected so) and *faint* (more than 5 % of the impacts peak below 10")
 print("times the force noise the detector sees).\n")
