@@ -7,7 +7,7 @@
 //! `phi_F = ln(F/F_Hertz)` and `phi_t = ln(t_c/t_Hertz)` functions of `s` alone:
 //!
 //! - Thornton's yield ([`crate::thornton`]): the ratios depend on `u / V_y` alone, so
-//!   `(a, b) = (0, 1)`; filled at scene build from the closed forms ([`RatioMap::thornton`]),
+//!   `(a, b) = (0, 1)`; filled at scene build from the closed forms (`RatioMap::thornton`),
 //!   with `phi_t` the duration the detector reads from the pulse's area,
 //!   `ln(t_A / t_Hertz)` ([`crate::thornton::YieldRatios::area_duration`]).
 //! - A damped law with a fixed damping coefficient (MSC Adams IMPACT with a fixed `c_max`):
