@@ -62,6 +62,11 @@ use crate::sampled::SampledCalibration;
 /// Most beam modes a chain can carry.
 pub const MAX_MODES: usize = 4;
 
+/// The sections' states at most, two per section (one section per mode): the unknowns of
+/// the state re-estimation (`crate::settle`).
+#[cfg(feature = "settle")]
+pub(crate) const SECTION_STATES: usize = 2 * MAX_MODES;
+
 /// The states `(p, q)` of every second-order section (see [`EqualiserDesign`]), one pair per
 /// beam mode.
 pub type SectionStates = [[f32; 2]; MAX_MODES];

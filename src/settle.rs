@@ -49,7 +49,7 @@
 
 use crate::equaliser::{Equaliser, MAX_MODES};
 #[cfg(feature = "settle")]
-use crate::equaliser::{EqualiserDesign, SectionStates};
+use crate::equaliser::{EqualiserDesign, SECTION_STATES, SectionStates};
 #[cfg(all(feature = "settle", feature = "pulse_shape"))]
 use crate::settle_clip::{ClipAnchor, ClipColumns, ClipError};
 
@@ -74,7 +74,7 @@ pub const RANK_TOLERANCE: f32 = 1e-4;
 
 /// Unknowns at most: two states per section.
 #[cfg(feature = "settle")]
-pub(crate) const UNKNOWNS: usize = 2 * MAX_MODES;
+const UNKNOWNS: usize = SECTION_STATES;
 
 /// Where the re-estimation stands.
 #[cfg(feature = "settle")]

@@ -23,8 +23,7 @@
 //! [`MAX_TO_WINDOW`] samples (a pulse's tail: tens to a few thousand), once per clipped
 //! pulse; 100 B more per [`crate::settle::Settler`].
 
-use crate::equaliser::{EqualiserDesign, SectionStates};
-use crate::settle::UNKNOWNS;
+use crate::equaliser::{EqualiserDesign, SECTION_STATES as UNKNOWNS, SectionStates};
 
 /// Samples from the anchor to the window at most: a pulse that took longer to end is not
 /// read (its columns would cost that many steps per unknown).
