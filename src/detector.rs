@@ -1867,7 +1867,8 @@ fn clip_errors<const N: usize, M: Backend>(
 /// The shape a clipped pulse is measured with (`Detector::measure_clipped`): the Hertz
 /// pulse's own table for the undamped Hertz law (its ratios Hertz's, whatever sampling or
 /// chain correction it carries), the scene's for another; none behind a chain with beam
-/// modes (`readable` false: the flank fit is not reached there) or for a yielding top, so
+/// modes without the feature `settle` (`readable` false: the flank fit is not reached
+/// there) or for a yielding top, so
 /// that the Hertz table's 1 024 steps are taken only where they are read.
 #[cfg(feature = "pulse_shape")]
 fn clip_shape(s: &crate::scene::Settings, readable: bool) -> PulseShape {

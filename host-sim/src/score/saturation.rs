@@ -22,10 +22,10 @@
 //!    `tau <= tau* = (t / pi) acos((T / P)^(2/3))`, so with probability
 //!    `min(1, 2 tau* / dt)` when `P >= T`; the same for the dip against `c_min + 1/2`.
 //!
-//! On a rigid chain the kernel's detector measures such a pulse from its unclipped flanks when
-//! it knows the contact's shape (the undamped Hertz law, or a self-similar damped law, whose
-//! shape the scene build tabulates) and no class yields; otherwise, or when the flanks are too
-//! short, it rejects the pulse as `Saturated` (a raw code at either end of the ADC range). The prediction leaves out the noise (a few counts against a full scale of
+//! The kernel's detector measures such a pulse from its unclipped flanks, on a rigid beam and
+//! behind a chain, when it knows the contact's shape (the undamped Hertz law, or a
+//! self-similar damped law, whose shape the scene build tabulates) and no class yields;
+//! otherwise, or when the flanks are too short, it rejects the pulse as `Saturated` (a raw code at either end of the ADC range). The prediction leaves out the noise (a few counts against a full scale of
 //! thousands), the drift (it depends on the stream's length) and pile-ups (two pulses within
 //! one contact add up).
 
@@ -78,9 +78,9 @@ pub struct ClipPrediction {
     pub full_scale_force_n: f64,
     /// Largest peak gain `G+` of the chain over the scene's pulse durations (1: rigid).
     pub peak_gain: f64,
-    /// The kernel measures a clipped pulse from its unclipped flanks: a rigid chain, a
-    /// self-similar contact law (undamped Hertz or restitution-parametrised) and no class that
-    /// yields. Otherwise it rejects a clipped pulse as saturated.
+    /// The kernel measures a clipped pulse from its unclipped flanks: a self-similar contact
+    /// law (undamped Hertz or restitution-parametrised) and no class that yields, on a rigid
+    /// beam or behind a chain. Otherwise it rejects a clipped pulse as saturated.
     pub from_flanks: bool,
 }
 
@@ -108,9 +108,8 @@ impl ClipPrediction {
             "the kernel measures them from their unclipped flanks where it can (wider \
              sigmas, so less coverage) and rejects the rest as saturated"
         } else {
-            "the kernel rejects them as saturated (it reads clipped flanks only on a rigid \
-             chain, under the Hertz law or a restitution-parametrised one, with no class \
-             that yields)"
+            "the kernel rejects them as saturated (it reads clipped flanks only under the \
+             Hertz law or a restitution-parametrised one, with no class that yields)"
         };
         (self.share > WARN_SHARE).then(|| {
             format!(
@@ -152,7 +151,7 @@ pub fn predict(scene: &SceneFile) -> Result<ClipPrediction, SaturationError> {
         per_class,
         full_scale_force_n: ends.top / ends.counts_per_n,
         peak_gain: gain.largest(),
-        from_flanks: scene.sensor.is_rigid() && scene.contact.self_similar() && !scene.yields(),
+        from_flanks: scene.contact.self_similar() && !scene.yields(),
     })
 }
 
