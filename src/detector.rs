@@ -1518,8 +1518,8 @@ impl<M: Backend> Detector<M> {
     }
 
     /// A pulse with samples at the ADC's full scale, measured from its unclipped flanks when
-    /// the clipped samples are one run at its top, on a rigid chain or behind an accelerometer
-    /// alone (feature `pulse_shape`), with two samples either side of the run (beyond those
+    /// the clipped samples are one run at its top, on a rigid chain or behind a chain (feature
+    /// `pulse_shape`; behind beam modes also `settle`), with two samples either side of the run (beyond those
     /// the equaliser's FIR took from a clipped one): an undamped pulse by the Hertz shape
     /// ([`flank_fit`], rigid only), a damped one by the contact's own (`Settings::pulse_shape`,
     /// [`shape_flank_fit`]); otherwise, or when the fit does not describe the flanks,

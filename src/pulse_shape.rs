@@ -248,9 +248,13 @@ const SUM_SAMPLES: usize = 8192;
 /// noise is its samples' and the table's error summed over them (`ShapeFit::sum_sigma`):
 /// where a flank sample sees no force, the sum still tests the fit. A flank sample that lies
 /// in an end interval the table's reach leaves out is not read, and the fit is made again
-/// (`READINGS` times at most) until the samples it reads stay the same. It starts from the
-/// best
-/// of `SCAN` durations between the four samples' span, `run + 3`, and twice the sum over
+/// (`READINGS` times at most) until the samples it reads stay the same. Where no flank
+/// sample it reads sees an end of the contact, or one beyond it sees none, the flank samples
+/// still bound that end (`ShapeFit::end_bounds`: the contact starts after a sample that sees
+/// no force and before one that does), and the end joins the fit as a row within that
+/// interval, its standard deviation the interval's over `sqrt 12`. It starts from the best
+/// of `SCAN` durations between the span of the flank samples that see force (`run + 3` when
+/// all four do), and twice the sum over
 /// `level x area`, each with its peak at `PLACES` places across the run (`scan_start`),
 /// then takes up to `STEPS` Gauss-Newton steps, each halved until it lowers the residual
 /// (`F_peak` kept above half its value, the peak within the run, the clipped samples inside
@@ -303,7 +307,12 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
         return None;
     }
     let (run, level) = (flanks.run, flanks.level);
-    let range = (shape.area * level / (2.0 * flanks.sum), 1.0 / (run + 3.0));
+    // The contact spans the flank samples that see force, and the run between them.
+    let unseen = ys.iter().filter(|&&y| y < 4.0 * noise).count() as f32;
+    let range = (
+        shape.area * level / (2.0 * flanks.sum),
+        1.0 / (run + 3.0 - unseen),
+    );
     if range.0.is_nan() || range.0 >= range.1 {
         return None;
     }
@@ -319,6 +328,7 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
         shape,
         noise,
         sum_weight: 0.0,
+        end_rows: [[0.0; 2]; 2],
     };
     let keep = |[peak, at, r]: [f32; 3], floor: f32| {
         let r = r.max(range.0).min(range.1);
@@ -335,7 +345,7 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
     };
     let kept = keep(start, 0.0);
     let mut fit = fit.read_at(kept).weighted(kept)?;
-    let (mut p, mut best) = descend(&fit, kept, &keep)?;
+    let mut p = descend(&fit, kept, &keep)?;
     // A flank sample that the fit moved into an end interval the reach leaves out: again,
     // without reading it (`accepted` takes the last fit only when the samples it reads stay
     // the same).
@@ -345,23 +355,24 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
             break;
         }
         fit = again.weighted(p)?;
-        (p, best) = descend(&fit, p, &keep)?;
+        p = descend(&fit, p, &keep)?;
     }
-    accepted(&fit, p, best, level, range)
+    accepted(&fit, p, level, range)
 }
 
 /// Up to [`STEPS`] Gauss-Newton steps of `fit` from `p`, each halved until it lowers the
 /// residual (the steep rise of a damped pulse can throw a full step off the pulse) and kept
-/// in range by `keep(step, floor)`; none that does: converged. The point and its residual.
+/// in range by `keep(step, floor)`; none that does: converged. The point it reaches.
 fn descend(
     fit: &ShapeFit,
     mut p: [f32; 3],
     keep: &impl Fn([f32; 3], f32) -> [f32; 3],
-) -> Option<([f32; 3], f32)> {
+) -> Option<[f32; 3]> {
     let mut best = fit.rss(p)?;
     for _ in 0..STEPS {
         let (ks, ys) = fit.read();
-        let (next, _, _) = gauss_newton_of(ks, ys, p, fit.g(), &[fit.sum_row(p)?])?;
+        let (rows, count) = fit.rows(p)?;
+        let (next, _, _) = gauss_newton_of(ks, ys, p, fit.g(), rows.get(..count)?)?;
         let mut scale = 1.0;
         let mut moved = false;
         for _ in 0..HALVINGS {
@@ -382,7 +393,7 @@ fn descend(
             break;
         }
     }
-    Some((p, best))
+    Some(p)
 }
 
 /// The fit at `p = [F_peak, k_peak, r]` when it describes a clipped pulse of the table's
@@ -395,17 +406,19 @@ fn descend(
 /// error and the sections' state error (`FlankChain::state_error`), and the chain's `FlankChain::level_error` times `F_peak`), their residual `rss`
 /// with the sum row's above `8 x` that RMS, or fewer than four rows that see
 /// the pulse (a flank sample whose force is below its noise RMS does not: at the contact's
-/// start the fit sits on the kink between no force and the steep flank; a pulse that rises
-/// from no force past the level within one sample leaves three, and nothing would test the
-/// fit).
+/// start the fit sits on the kink between no force and the steep flank; the sum row and the
+/// rows of the contact's ends that flank samples bound do, so a pulse that rises from no
+/// force past the level within one sample is tested by its start's row).
 fn accepted(
     fit: &ShapeFit,
     p: [f32; 3],
-    rss: f32,
     level: f32,
     (r_lo, r_hi): (f32, f32),
 ) -> Option<(FlankFit, f32)> {
     let [peak, at, r] = p;
+    // The rows weighted at `p` (the descent kept the weights of where it started).
+    let weighted = fit.weighted(p)?;
+    let rss = weighted.rss(p)?;
     let shape = fit.shape;
     let table = fit.flank_table(p);
     let noise = fit.noise;
@@ -446,14 +459,15 @@ fn accepted(
         (g, _) if peak * g < sigma => (0.0, 0.0),
         read => read,
     };
-    let row = fit.weighted(p)?.sum_row(p)?;
+    let (rows, count) = weighted.rows(p)?;
+    let [row, ..] = rows;
     // Three unknowns: at least four rows that see the pulse, or the residual tests nothing.
     let (ks, ys) = fit.read();
     let seen = ks.iter().filter(|&&k| felt(r * (k - at)).0 > 0.0).count();
-    if seen + usize::from(row[0] != 0.0) < 4 {
+    if seen + usize::from(row[0] != 0.0) + count - 1 < 4 {
         return None;
     }
-    let (_, inv, _) = gauss_newton_of(ks, ys, p, felt, &[row])?;
+    let (_, inv, _) = gauss_newton_of(ks, ys, p, felt, rows.get(..count)?)?;
     let fit = FlankFit {
         peak,
         peak_at: at,
@@ -485,6 +499,9 @@ struct ShapeFit<'a> {
     shape: &'a PulseShape,
     noise: f32,
     sum_weight: f32,
+    /// The contact's start and end rows, each `[mid, weight]` ([`Self::end_bounds`]);
+    /// weight 0: none.
+    end_rows: [[f32; 2]; 2],
 }
 
 impl ShapeFit<'_> {
@@ -580,10 +597,53 @@ impl ShapeFit<'_> {
         let table = self.flank_table(p);
         let flank =
             libm::sqrtf(self.noise * self.noise + table * table + self.chain.state_variance());
+        let row = |b: Option<[f32; 2]>| match b {
+            Some([lo, hi]) if hi > lo => [0.5 * (lo + hi), flank * libm::sqrtf(12.0) / (hi - lo)],
+            _ => [0.0; 2],
+        };
+        // Force at a flank sample: four times its noise (the sensor's, the table's and the
+        // chain's) or more; none: within that of 0.
+        let seen = 4.0 * flank;
         Some(ShapeFit {
             sum_weight: flank / self.sum_sigma(p)?,
+            end_rows: [
+                row(self.end_bounds(p, seen, false)),
+                row(self.end_bounds(p, seen, true)),
+            ],
             ..*self
         })
+    }
+
+    /// Where the contact starts (`after` false) or ends at `p`, `[earliest, latest]`
+    /// (samples), from the flank samples on that side that see force (at least `seen` counts)
+    /// and those that do not: between the outermost that does (or the run's edge) and the
+    /// nearest beyond it that does not; or, where none does not and the outermost that does
+    /// lies in the end interval the table's reach leaves out (the fit does not read it),
+    /// within that interval beyond it. `None` when nothing bounds it so.
+    fn end_bounds(&self, p: [f32; 3], seen: f32, after: bool) -> Option<[f32; 2]> {
+        // Distances outward from the run: `-k` before it, `k` after it.
+        let out = if after { 1.0 } else { -1.0 };
+        let (first, last) = self.clipped();
+        let side = || {
+            let pairs = self.ks.iter().zip(&self.ys);
+            pairs
+                .filter(move |&(&k, _)| out * k > 0.0)
+                .map(move |(&k, &y)| (out * k, y))
+        };
+        let edge = if after { last } else { -first };
+        let read = self.read().0;
+        let read_sees = side().any(|(d, y)| y >= seen && read.contains(&(out * d)));
+        let inner = side()
+            .filter(|&(_, y)| y >= seen)
+            .fold(edge, |m, (d, _)| m.max(d));
+        let beyond = side().filter(|&(d, y)| y.abs() < seen && d > inner);
+        let outer = match beyond.map(|(d, _)| d).reduce(f32::min) {
+            Some(d) => d,
+            None if !read_sees && inner > edge => inner + SHAPE_STEP / p[2],
+            None => return None,
+        };
+        let [a, b] = [out * inner, out * outer];
+        Some([a.min(b), a.max(b)])
     }
 
     /// The model `F_peak g(r (k - k_peak) + u_peak)` at sample `k` and its gradient in
@@ -622,6 +682,27 @@ impl ShapeFit<'_> {
         Some([w * j1, w * j2, w * j3, w * (self.rest - s)])
     }
 
+    /// The extra rows at `p`, weighted: the sum row, then a row per end of the contact that
+    /// flank samples bound ([`Self::end_bounds`]), `w [0, 1, d end / dr, mid - end]` with the
+    /// start `k_peak - u_peak / r` and the end `k_peak + (1 - u_peak) / r`; and how many.
+    fn rows(&self, p: [f32; 3]) -> Option<([[f32; 4]; 3], usize)> {
+        let mut rows = [self.sum_row(p)?, [0.0; 4], [0.0; 4]];
+        let [_, at, r] = p;
+        let u = self.shape.peak_at;
+        let ends = [
+            (at - u / r, u / (r * r)),
+            (at + (1.0 - u) / r, -(1.0 - u) / (r * r)),
+        ];
+        let mut count = 1;
+        for (&[mid, w], (end, slope)) in self.end_rows.iter().zip(ends) {
+            if let Some(row) = rows.get_mut(count).filter(|_| w > 0.0) {
+                *row = [0.0, w, w * slope, w * (mid - end)];
+                count += 1;
+            }
+        }
+        Some((rows, count))
+    }
+
     /// The sum's standard deviation at `p` (counts): the noise of its `rest_samples` and the
     /// table's error at each contact sample in it, summed (it may share one sign), with the
     /// force at the reach's ends where the reach leaves out an end interval (a sample may
@@ -655,8 +736,9 @@ impl ShapeFit<'_> {
             let e = y - self.model(p, k).0;
             a + e * e
         });
-        let [.., e] = self.sum_row(p)?;
-        Some(flanks + e * e)
+        let (rows, count) = self.rows(p)?;
+        let extra = rows.iter().take(count).fold(0.0, |a, [.., e]| a + e * e);
+        Some(flanks + extra)
     }
 }
 
