@@ -252,7 +252,10 @@ const SUM_SAMPLES: usize = 8192;
 /// sample it reads sees an end of the contact, or one beyond it sees none, the flank samples
 /// still bound that end (`ShapeFit::end_bounds`: the contact starts after a sample that sees
 /// no force and before one that does), and the end joins the fit as a row within that
-/// interval, its standard deviation the interval's over `sqrt 12`. It starts from the best
+/// interval, its standard deviation the interval's over `sqrt 12`. Where the model falls
+/// below the level at the run's first or last clipped sample, the descent takes a row that
+/// lifts it there (`ShapeFit::level_rows`: the force was at the level or above); the sigmas
+/// do not, an inequality stating no more. It starts from the best
 /// of `SCAN` durations between the span of the flank samples that see force (`run + 3` when
 /// all four do), and twice the sum over
 /// `level x area`, each with its peak at `PLACES` places across the run (`scan_start`),
@@ -328,6 +331,7 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
         shape,
         noise,
         sum_weight: 0.0,
+        level,
         end_rows: [[0.0; 2]; 2],
     };
     let keep = |[peak, at, r]: [f32; 3], floor: f32| {
@@ -371,8 +375,8 @@ fn descend(
     let mut best = fit.rss(p)?;
     for _ in 0..STEPS {
         let (ks, ys) = fit.read();
-        let (rows, count) = fit.rows(p)?;
-        let (next, _, _) = gauss_newton_of(ks, ys, p, fit.g(), rows.get(..count)?)?;
+        let (rows, _) = fit.rows(p)?;
+        let (next, _, _) = gauss_newton_of(ks, ys, p, fit.g(), &rows)?;
         let mut scale = 1.0;
         let mut moved = false;
         for _ in 0..HALVINGS {
@@ -461,13 +465,15 @@ fn accepted(
     };
     let (rows, count) = weighted.rows(p)?;
     let [row, ..] = rows;
+    // The sum row and the end rows; not the level rows.
+    let tested = rows.get(..3)?;
     // Three unknowns: at least four rows that see the pulse, or the residual tests nothing.
     let (ks, ys) = fit.read();
     let seen = ks.iter().filter(|&&k| felt(r * (k - at)).0 > 0.0).count();
-    if seen + usize::from(row[0] != 0.0) + count - 1 < 4 {
+    if seen + usize::from(row[0] != 0.0) + count < 4 {
         return None;
     }
-    let (_, inv, _) = gauss_newton_of(ks, ys, p, felt, rows.get(..count)?)?;
+    let (_, inv, _) = gauss_newton_of(ks, ys, p, felt, tested)?;
     let fit = FlankFit {
         peak,
         peak_at: at,
@@ -499,6 +505,8 @@ struct ShapeFit<'a> {
     shape: &'a PulseShape,
     noise: f32,
     sum_weight: f32,
+    /// The clipping level (counts).
+    level: f32,
     /// The contact's start and end rows, each `[mid, weight]` ([`Self::end_bounds`]);
     /// weight 0: none.
     end_rows: [[f32; 2]; 2],
@@ -682,25 +690,43 @@ impl ShapeFit<'_> {
         Some([w * j1, w * j2, w * j3, w * (self.rest - s)])
     }
 
-    /// The extra rows at `p`, weighted: the sum row, then a row per end of the contact that
-    /// flank samples bound ([`Self::end_bounds`]), `w [0, 1, d end / dr, mid - end]` with the
-    /// start `k_peak - u_peak / r` and the end `k_peak + (1 - u_peak) / r`; and how many.
-    fn rows(&self, p: [f32; 3]) -> Option<([[f32; 4]; 3], usize)> {
-        let mut rows = [self.sum_row(p)?, [0.0; 4], [0.0; 4]];
+    /// The extra rows at `p`, weighted: the sum row; a row per end of the contact that flank
+    /// samples bound ([`Self::end_bounds`]), `w [0, 1, d end / dr, mid - end]` with the start
+    /// `k_peak - u_peak / r` and the end `k_peak + (1 - u_peak) / r`; and a row per end of the
+    /// clipped run where the model lies below the level there ([`Self::level_rows`]). Absent
+    /// rows are zeros; with the number of end rows.
+    fn rows(&self, p: [f32; 3]) -> Option<([[f32; 4]; 5], usize)> {
         let [_, at, r] = p;
         let u = self.shape.peak_at;
         let ends = [
             (at - u / r, u / (r * r)),
             (at + (1.0 - u) / r, -(1.0 - u) / (r * r)),
         ];
-        let mut count = 1;
-        for (&[mid, w], (end, slope)) in self.end_rows.iter().zip(ends) {
-            if let Some(row) = rows.get_mut(count).filter(|_| w > 0.0) {
+        let [l0, l1] = self.level_rows(p);
+        let mut rows = [self.sum_row(p)?, [0.0; 4], [0.0; 4], l0, l1];
+        let mut count = 0;
+        for ((&[mid, w], (end, slope)), row) in
+            self.end_rows.iter().zip(ends).zip(rows.iter_mut().skip(1))
+        {
+            if w > 0.0 {
                 *row = [0.0, w, w * slope, w * (mid - end)];
                 count += 1;
             }
         }
         Some((rows, count))
+    }
+
+    /// At the first and the last clipped sample (`Self::clipped`), where the model lies
+    /// below the level (less the chain's `level_error` times `F_peak`), the row that lifts it
+    /// there, `[dm/dp, level - m]`; zeros where it does not. The descent takes them (the
+    /// force was at the level or above there); the sigmas do not (an inequality).
+    fn level_rows(&self, p: [f32; 3]) -> [[f32; 4]; 2] {
+        let level = self.level - self.chain.level_error * p[0];
+        let (first, last) = self.clipped();
+        [first, last].map(|k| match self.model(p, k) {
+            (m, [g0, g1, g2]) if m < level => [g0, g1, g2, level - m],
+            _ => [0.0; 4],
+        })
     }
 
     /// The sum's standard deviation at `p` (counts): the noise of its `rest_samples` and the
@@ -736,8 +762,8 @@ impl ShapeFit<'_> {
             let e = y - self.model(p, k).0;
             a + e * e
         });
-        let (rows, count) = self.rows(p)?;
-        let extra = rows.iter().take(count).fold(0.0, |a, [.., e]| a + e * e);
+        let (rows, _) = self.rows(p)?;
+        let extra = rows.iter().fold(0.0, |a, [.., e]| a + e * e);
         Some(flanks + extra)
     }
 }
