@@ -49,10 +49,11 @@ cal_row() { # label, scene file, seed, flags...
     "$bin" evaluate --scene "$file" --n "$cal_n" --seed "$seed" --reference-draws 20000 "$@" \
         --json | python3 -c '
 import json, sys
+sys.path.insert(0, "docs")
+from targets import worst_bin  # noqa: E402
 d = json.load(sys.stdin)
 rel = d["reliability"]
-full = [b for b in rel["bins"] if b["verdicts"] >= rel["min_verdicts"]]
-worst = max(full, key=lambda b: abs(b["stated"] - b["observed"]))
+worst = worst_bin(d)
 print("| %s | %s | %.2f | %.2f | %.2f / %.2f | %.3f / %.3f (%d) |" % (sys.argv[1], sys.argv[2],
     100 * d["forced_choice_accuracy"], 100 * d["coverage"],
     100 * rel["calibration_error_max"], 100 * rel["calibration_error_mean"],

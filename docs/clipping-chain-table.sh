@@ -19,10 +19,11 @@ row() { # label, scene file, seed, flags...
     shift 3
     "$bin" evaluate --scene "$file" --n "$n" --seed "$seed" "$@" --json | python3 -c '
 import json, sys
+sys.path.insert(0, "docs")
+from targets import worst_bin  # noqa: E402
 d = json.load(sys.stdin)
 rel = d["reliability"]
-full = [b for b in rel["bins"] if b["verdicts"] >= rel["min_verdicts"]]
-worst = max(full, key=lambda b: abs(b["stated"] - b["observed"]))
+worst = worst_bin(d)
 p = lambda v: "%.2f" % (100 * v)
 print("| %s | %s | %s | %s | %s | %s / %s | %d | %s | %.3f / %.3f (%d) |" % (sys.argv[1],
     p(d["forced_choice_accuracy"]), p(d["forced_choice_accuracy"] - d["reference"]["accuracy"]),

@@ -1,8 +1,9 @@
 """The targets of docs/grid.md, checked on one `host-sim evaluate --json` object, and the
 lines both tables print about them.
 
-docs/grid-table.sh and docs/random-table.sh import it (run from the repository root with
-docs/ on the path). A row misses a target when:
+docs/grid-table.sh and docs/random-table.sh import it, and docs/chain-tables.sh and
+docs/clipping-chain-table.sh its `worst_bin` (run from the repository root with docs/ on the
+path). A row misses a target when:
   forced choice     the kernel is more than 1 pp below the reference limit beyond two standard
                     errors of the difference;
   confident errors  more than 1 % of its Class verdicts are wrong;
@@ -28,6 +29,14 @@ def check(d):
     if worst_bin > 0.02:
         fails.append("calibration")
     return fails, gap, se, worst_bin
+
+
+def worst_bin(d):
+    """The reliability bin of at least `min_verdicts` verdicts farthest from its stated
+    posterior (a dict with `stated`, `observed`, `verdicts`)."""
+    rel = d["reliability"]
+    full = [b for b in rel["bins"] if b["verdicts"] >= rel["min_verdicts"]]
+    return max(full, key=lambda b: abs(b["stated"] - b["observed"]))
 
 
 REFUSED = "the kernel refused the scene"

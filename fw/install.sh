@@ -39,7 +39,7 @@ for t in llvm-size llvm-objdump; do
 done
 
 if command -v qemu-system-arm > /dev/null; then
-    step "qemu-system-arm: present ($(qemu-system-arm --version | head -1))"
+    step "qemu-system-arm: present ($(qemu-system-arm --version | sed -n 1p))"
 else
     step "qemu-system-arm: installing (apt)"
     sudo=""
@@ -50,7 +50,7 @@ else
 fi
 
 if command -v defmt-print > /dev/null; then
-    step "defmt-print: present ($(defmt-print --version | head -1))"
+    step "defmt-print: present ($(defmt-print --version | sed -n 1p))"
 else
     step "defmt-print: installing (cargo install, about 2 minutes)"
     cargo install --locked defmt-print --version 1.2.0

@@ -193,8 +193,6 @@ struct PendingClip {
     anchor: u64,
     /// The sample after the pulse's last.
     end: u64,
-    /// The pulse's largest sample, where a refusal is reported.
-    max_at: u64,
     /// What the pre-trigger samples carried beyond the noise (counts RMS, `Pulse::excess`):
     /// ringing that an earlier clipped impact left, slow against the pulse.
     excess: f32,
@@ -549,10 +547,6 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// raw samples' ([`crate::chain_residual::raw_error`]); zeros on a rigid chain.
     #[cfg(feature = "pulse_shape")]
     clip_errors: [[f32; CLIP_ERROR_POINTS]; 3],
-    /// The chain has beam modes: a clipped pulse waits for the sections' state error
-    /// (`pending`).
-    #[cfg(all(feature = "pulse_shape", feature = "settle"))]
-    behind_modes: bool,
     /// Behind beam modes, their gain above their band, `1 + sum_j g_j`, and how fast the
     /// raw top may part from that times the force, `sum_j g_j w_j^2 / (1 + sum_j g_j)`
     /// (`w_j` in radians per sample).
@@ -611,6 +605,8 @@ impl<M: Backend> Detector<M> {
         for (w, mode) in ring_omegas.iter_mut().zip(modes) {
             *w = core::f32::consts::TAU * mode.frequency_hz / fs;
         }
+        #[cfg(all(feature = "pulse_shape", feature = "settle"))]
+        let mode_gain = 1.0 + modes.iter().map(|m| m.gain).sum::<f32>();
         Self {
             trigger: (s.trigger_sigmas * noise).max(2.0),
             release: (s.release_sigmas * noise).max(1.0),
@@ -646,16 +642,14 @@ impl<M: Backend> Detector<M> {
             #[cfg(feature = "pulse_shape")]
             clip_lag,
             #[cfg(all(feature = "pulse_shape", feature = "settle"))]
-            behind_modes: !modes.is_empty(),
-            #[cfg(all(feature = "pulse_shape", feature = "settle"))]
-            mode_gain: 1.0 + modes.iter().map(|m| m.gain).sum::<f32>(),
+            mode_gain,
             #[cfg(all(feature = "pulse_shape", feature = "settle"))]
             mode_slow: modes
                 .iter()
                 .zip(&ring_omegas)
                 .map(|(m, w)| m.gain * w * w)
                 .sum::<f32>()
-                / (1.0 + modes.iter().map(|m| m.gain).sum::<f32>()),
+                / mode_gain,
             #[cfg(all(feature = "pulse_shape", feature = "settle"))]
             pending: None,
             dt_s: 1.0 / fs,
@@ -1529,10 +1523,7 @@ impl<M: Backend> Detector<M> {
     #[cold]
     #[inline(never)]
     fn measure_clipped(&self) -> Detection {
-        let reject = Detection::Pulse {
-            at_sample: self.pulse.max_at,
-            outcome: Err(RejectReason::Saturated),
-        };
+        let reject = self.reject(RejectReason::Saturated);
         if !self.clip_measurable() {
             return reject;
         }
@@ -1578,7 +1569,7 @@ impl<M: Backend> Detector<M> {
     #[cfg(all(feature = "pulse_shape", feature = "settle"))]
     fn clip_to_settle(&self, index: u64) -> Option<PendingClip> {
         let p = &self.pulse;
-        if !(self.behind_modes && p.saturated && self.clip_measurable()) {
+        if !(self.behind_modes() && p.saturated && self.clip_measurable()) {
             return None;
         }
         let (flanks, first) = self.flanks();
@@ -1587,7 +1578,6 @@ impl<M: Backend> Detector<M> {
             first,
             anchor: p.last_clip_at + 1 + u64::from(self.guard2),
             end: index + 1,
-            max_at: p.max_at,
             excess: p.excess,
         })
     }
@@ -1614,10 +1604,8 @@ impl<M: Backend> Detector<M> {
         error: Option<crate::settle_clip::ClipError>,
     ) -> Option<Detection> {
         let c = self.pending.take()?;
-        let reject = Detection::Pulse {
-            at_sample: c.max_at,
-            outcome: Err(RejectReason::Saturated),
-        };
+        // The waiting pulse is still the detector's (a sample fed resolves it first).
+        let reject = self.reject(RejectReason::Saturated);
         let Some(e) = error else {
             return Some(reject);
         };
@@ -1715,7 +1703,7 @@ impl<M: Backend> Detector<M> {
     #[cfg(feature = "pulse_shape")]
     fn clip_level(&self) -> f32 {
         #[cfg(feature = "settle")]
-        if self.behind_modes {
+        if self.behind_modes() {
             let p = &self.pulse;
             let headroom = self.adc_max as f32 - p.raw_before_clip as f32;
             return p.before_clip[1] + headroom / self.mode_gain;
@@ -1744,13 +1732,10 @@ impl<M: Backend> Detector<M> {
         0
     }
 
-    /// Whether a clipped pulse waits for the sections' state error (beam modes, with the
-    /// features `pulse_shape` and `settle`).
+    /// Whether a clipped pulse waits for the sections' state error (the chain has beam
+    /// modes, with the features `pulse_shape` and `settle`).
     fn behind_modes(&self) -> bool {
-        #[cfg(all(feature = "pulse_shape", feature = "settle"))]
-        return self.behind_modes;
-        #[cfg(not(all(feature = "pulse_shape", feature = "settle")))]
-        false
+        cfg!(all(feature = "pulse_shape", feature = "settle")) && self.ring_modes > 0
     }
 
     /// Whether the chain lets the flanks of a clipped pulse be read: a rigid one, or with

@@ -310,7 +310,9 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
         return None;
     }
     let (run, level) = (flanks.run, flanks.level);
-    // The contact spans the flank samples that see force, and the run between them.
+    // The contact spans the flank samples that see force, and the run between them. A
+    // sample below four noise RMS may see none (`ShapeFit::end_bounds` asks the same of the
+    // flank's whole sigma, known only once `F_peak` is: this bound is the looser).
     let unseen = ys.iter().filter(|&&y| y < 4.0 * noise).count() as f32;
     let range = (
         shape.area * level / (2.0 * flanks.sum),
@@ -372,10 +374,9 @@ fn descend(
     mut p: [f32; 3],
     keep: &impl Fn([f32; 3], f32) -> [f32; 3],
 ) -> Option<[f32; 3]> {
-    let mut best = fit.rss(p)?;
+    let (mut best, mut rows) = fit.residual(p)?;
     for _ in 0..STEPS {
         let (ks, ys) = fit.read();
-        let (rows, _) = fit.rows(p)?;
         let (next, _, _) = gauss_newton_of(ks, ys, p, fit.g(), &rows)?;
         let mut scale = 1.0;
         let mut moved = false;
@@ -387,8 +388,8 @@ fn descend(
                 c + scale * (nc - c),
             ];
             let q = keep(step, 0.5 * a);
-            if let Some(e) = fit.rss(q).filter(|&e| e < best) {
-                (p, best, moved) = (q, e, true);
+            if let Some((e, at_q)) = fit.residual(q).filter(|&(e, _)| e < best) {
+                (p, best, rows, moved) = (q, e, at_q, true);
                 break;
             }
             scale *= 0.5;
@@ -422,11 +423,10 @@ fn accepted(
     let [peak, at, r] = p;
     // The rows weighted at `p` (the descent kept the weights of where it started).
     let weighted = fit.weighted(p)?;
-    let rss = weighted.rss(p)?;
+    let (rss, _) = weighted.residual(p)?;
     let shape = fit.shape;
     let table = fit.flank_table(p);
-    let noise = fit.noise;
-    let sigma2 = noise * noise + table * table + fit.chain.state_variance();
+    let sigma2 = fit.flank_variance(p);
     // The flank samples read and unread as the fit read them, each unread one within the
     // force its end interval spans (0 to the force at the reach's end) or the model's.
     let again = fit.read_at(p);
@@ -463,17 +463,16 @@ fn accepted(
         (g, _) if peak * g < sigma => (0.0, 0.0),
         read => read,
     };
+    // The sum row and the end rows; not the level rows.
     let (rows, count) = weighted.rows(p)?;
     let [row, ..] = rows;
-    // The sum row and the end rows; not the level rows.
-    let tested = rows.get(..3)?;
     // Three unknowns: at least four rows that see the pulse, or the residual tests nothing.
     let (ks, ys) = fit.read();
     let seen = ks.iter().filter(|&&k| felt(r * (k - at)).0 > 0.0).count();
     if seen + usize::from(row[0] != 0.0) + count < 4 {
         return None;
     }
-    let (_, inv, _) = gauss_newton_of(ks, ys, p, felt, tested)?;
+    let (_, inv, _) = gauss_newton_of(ks, ys, p, felt, &rows)?;
     let fit = FlankFit {
         peak,
         peak_at: at,
@@ -599,12 +598,18 @@ impl ShapeFit<'_> {
         }
     }
 
-    /// The fit with its sum row weighted at `p` against one flank sample: the flank sample's
-    /// noise (the sensor's with [`Self::flank_table`]) over the sum's ([`Self::sum_sigma`]).
-    fn weighted(&self, p: [f32; 3]) -> Option<Self> {
+    /// The variance of a flank sample at `p` (counts^2): the sensor's noise, the table's
+    /// error ([`Self::flank_table`]) and the sections' state error
+    /// (`FlankChain::state_variance`).
+    fn flank_variance(&self, p: [f32; 3]) -> f32 {
         let table = self.flank_table(p);
-        let flank =
-            libm::sqrtf(self.noise * self.noise + table * table + self.chain.state_variance());
+        self.noise * self.noise + table * table + self.chain.state_variance()
+    }
+
+    /// The fit with its sum row weighted at `p` against one flank sample: the flank sample's
+    /// sigma ([`Self::flank_variance`]) over the sum's ([`Self::sum_sigma`]).
+    fn weighted(&self, p: [f32; 3]) -> Option<Self> {
+        let flank = libm::sqrtf(self.flank_variance(p));
         let row = |b: Option<[f32; 2]>| match b {
             Some([lo, hi]) if hi > lo => [0.5 * (lo + hi), flank * libm::sqrtf(12.0) / (hi - lo)],
             _ => [0.0; 2],
@@ -690,20 +695,18 @@ impl ShapeFit<'_> {
         Some([w * j1, w * j2, w * j3, w * (self.rest - s)])
     }
 
-    /// The extra rows at `p`, weighted: the sum row; a row per end of the contact that flank
-    /// samples bound ([`Self::end_bounds`]), `w [0, 1, d end / dr, mid - end]` with the start
-    /// `k_peak - u_peak / r` and the end `k_peak + (1 - u_peak) / r`; and a row per end of the
-    /// clipped run where the model lies below the level there ([`Self::level_rows`]). Absent
-    /// rows are zeros; with the number of end rows.
-    fn rows(&self, p: [f32; 3]) -> Option<([[f32; 4]; 5], usize)> {
+    /// The extra rows at `p` that the sigmas take, weighted: the sum row, and a row per end
+    /// of the contact that flank samples bound ([`Self::end_bounds`]), `w [0, 1, d end / dr,
+    /// mid - end]` with the start `k_peak - u_peak / r` and the end `k_peak + (1 - u_peak) /
+    /// r`. Absent rows are zeros; with the number of end rows.
+    fn rows(&self, p: [f32; 3]) -> Option<([[f32; 4]; 3], usize)> {
         let [_, at, r] = p;
         let u = self.shape.peak_at;
         let ends = [
             (at - u / r, u / (r * r)),
             (at + (1.0 - u) / r, -(1.0 - u) / (r * r)),
         ];
-        let [l0, l1] = self.level_rows(p);
-        let mut rows = [self.sum_row(p)?, [0.0; 4], [0.0; 4], l0, l1];
+        let mut rows = [self.sum_row(p)?, [0.0; 4], [0.0; 4]];
         let mut count = 0;
         for ((&[mid, w], (end, slope)), row) in
             self.end_rows.iter().zip(ends).zip(rows.iter_mut().skip(1))
@@ -755,16 +758,19 @@ impl ShapeFit<'_> {
         (sigma > 0.0 && sigma.is_finite()).then_some(sigma)
     }
 
-    /// The residual sum of squares at `p`: the four samples' and the weighted sum row's.
-    fn rss(&self, p: [f32; 3]) -> Option<f32> {
+    /// The residual sum of squares at `p`, the samples' read and the extra rows' that the
+    /// descent takes ([`Self::rows`] and [`Self::level_rows`]), and those rows.
+    fn residual(&self, p: [f32; 3]) -> Option<(f32, [[f32; 4]; 5])> {
         let (ks, ys) = self.read();
         let flanks = ks.iter().zip(ys).fold(0.0, |a, (&k, &y)| {
             let e = y - self.model(p, k).0;
             a + e * e
         });
-        let (rows, _) = self.rows(p)?;
+        let ([sum, start, end], _) = self.rows(p)?;
+        let [l0, l1] = self.level_rows(p);
+        let rows = [sum, start, end, l0, l1];
         let extra = rows.iter().fold(0.0, |a, [.., e]| a + e * e);
-        Some(flanks + extra)
+        Some((flanks + extra, rows))
     }
 }
 
