@@ -123,7 +123,7 @@ fn bench(c: &mut Criterion) {
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
         #[cfg(feature = "pulse_shape")]
-        from_flanks: false,
+        shape_fitted: false,
     };
     c.bench_function(&format!("{backend}/classify one measurement"), |b| {
         b.iter(|| black_box(scene.classify(black_box(&meas))))
@@ -131,6 +131,28 @@ fn bench(c: &mut Criterion) {
     c.bench_function(&format!("{backend}/build paper scene"), |b| {
         b.iter(|| black_box(Scene::paper()))
     });
+    #[cfg(feature = "pulse_shape")]
+    short_pulse(c, backend);
+}
+
+/// A short damped pulse's fit by its contact's shape (`coalshock::short_pulse`), which the
+/// detector adds to a pulse below 7.8 samples: the Hertz table at 3 samples per contact time
+/// with one count of noise, its peak 0.3 samples after the largest sample.
+#[cfg(feature = "pulse_shape")]
+fn short_pulse(c: &mut Criterion, backend: &str) {
+    use coalshock::pulse_shape::PulseShape;
+    use coalshock::short_pulse::short_shape_fit;
+    let shape = PulseShape::hertz();
+    let noise = [0.6, -1.1, 0.3, 0.9, -0.4];
+    let mut ys = [0.0f32; 5];
+    for (j, y) in ys.iter_mut().enumerate() {
+        let k = j as f32 - 2.0;
+        *y = 1000.0 * shape.at((k - 0.3) / 3.0 + 0.5).0 + noise[j];
+    }
+    c.bench_function(
+        &format!("{backend}/short pulse by its shape (3 samples)"),
+        |b| b.iter(|| black_box(short_shape_fit(black_box(&ys), 1.0, &shape, 3.0))),
+    );
 }
 
 criterion_group!(benches, bench);

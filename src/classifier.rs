@@ -33,13 +33,14 @@ pub struct Measurement {
     /// because the noise lifted it over the trigger, and that noise is in its measurement:
     /// such a pulse gets no `Class` verdict (see [`Scene::classify`]).
     pub trigger_margin: f32,
-    /// Measured from its clipped flanks with its contact's shape (the detector's flank fit):
-    /// its peak and duration are then the continuous pulse's, which the scene's sampling
-    /// corrections (of a fit through the top's samples) do not apply to. With the
-    /// `pulse_shape` feature only (without it, only an undamped pulse, whose sampling needs
-    /// no correction, is measured from its flanks).
+    /// Measured by its contact's shape: from its clipped flanks (the detector's flank fit), or
+    /// a short damped pulse from its five samples about the largest
+    /// ([`crate::short_pulse::short_shape_fit`]). Its peak and duration are then the
+    /// continuous pulse's, which the scene's sampling corrections (of a fit through the top's
+    /// samples) do not apply to. With the `pulse_shape` feature only (without it, only an
+    /// undamped pulse, whose sampling needs no correction, is measured from its flanks).
     #[cfg(feature = "pulse_shape")]
-    pub from_flanks: bool,
+    pub shape_fitted: bool,
 }
 
 /// The least [`Measurement::trigger_margin`] of a `Class` verdict: 3 standard deviations. A
@@ -267,7 +268,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
     ///                       trigger_margin: f32::INFINITY,
-    ///                       #[cfg(feature = "pulse_shape")] from_flanks: false };
+    ///                       #[cfg(feature = "pulse_shape")] shape_fitted: false };
     /// let (verdict, lls) = scene.classify_with_likelihoods(&m);
     /// assert_eq!(verdict, scene.classify(&m));
     /// assert!(lls.is_some());
@@ -416,7 +417,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     ///                       sigma_ln_force: 0.01, sigma_ln_duration: 0.01,
     ///                       cov_ln: -1e-4, asymmetry: 0.0,
     ///                       trigger_margin: f32::INFINITY,
-    ///                       #[cfg(feature = "pulse_shape")] from_flanks: false };
+    ///                       #[cfg(feature = "pulse_shape")] shape_fitted: false };
     /// let (x, y, noise) = scene.located(0, &m).unwrap();
     /// let inv = scene.invert(0, &m).unwrap();
     /// assert!((x.exp() / inv.radius_m - 1.0).abs() < 1e-5);
@@ -466,7 +467,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     /// The impact of the kernel's own model (undamped Hertz, or Thornton's undamped yield for a
     /// class that states a yield pressure) a measurement stands for: `F_max / force_ratio` and
     /// `t_c / duration_ratio` of the scene's [`crate::ContactCalibration`], each also divided by
-    /// (except for a pulse measured from its clipped flanks, `Measurement::from_flanks`)
+    /// (except for a pulse measured by its contact's shape, `Measurement::shape_fitted`)
     /// the sampling correction at the pulse's samples per pulse (whose spread joins the
     /// measurement's sigmas, and where the phase table is read, the measurement's own noise
     /// carried through the table's slopes in `ln n`, since the measured duration picks where
@@ -474,10 +475,10 @@ impl<const N: usize, M: Backend> Scene<N, M> {
     pub fn hertz_equivalent(&self, m: &Measurement) -> Measurement {
         let c = &self.settings().contact;
         #[cfg(feature = "pulse_shape")]
-        let from_flanks = m.from_flanks;
+        let shape_fitted = m.shape_fitted;
         #[cfg(not(feature = "pulse_shape"))]
-        let from_flanks = false;
-        if from_flanks || !self.settings().corrects_sampling() {
+        let shape_fitted = false;
+        if shape_fitted || !self.settings().corrects_sampling() {
             return Measurement {
                 peak_force_n: m.peak_force_n / c.force_ratio,
                 duration_s: m.duration_s / c.duration_ratio,
@@ -524,7 +525,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             asymmetry: m.asymmetry,
             trigger_margin: m.trigger_margin,
             #[cfg(feature = "pulse_shape")]
-            from_flanks: m.from_flanks,
+            shape_fitted: m.shape_fitted,
         }
     }
 }

@@ -73,6 +73,12 @@
 //!   sinusoid of known frequency through the largest sample and its larger neighbour,
 //!   `F_max` and `t_c` iterated three times. The fit reports its noise gain and what noise it
 //!   shares with the area, and the noise model carries both.
+//! - A short damped pulse (feature `pulse_shape`; on a rigid chain, below
+//!   [`crate::short_pulse::SHORT_SAMPLES`] samples as the fit through the top measures it):
+//!   the contact's own tabulated shape fitted to the five samples about the largest
+//!   ([`crate::short_pulse::short_shape_fit`]), its peak and duration the continuous pulse's
+//!   (no sampling correction), its sigmas the fit's; where fewer than three samples see the
+//!   pulse, or the fit does not hold, the fit through the top stands.
 //! - Long pulses (a scene whose shortest pulse has 24 samples or more): the peak is the
 //!   largest mean of `w` consecutive samples (`w` odd, up to an eighth of the shortest pulse,
 //!   at most 15), corrected for the pulse's own curvature over the window ([`smooth_fit`]):
@@ -86,6 +92,8 @@ use crate::math::{Backend, DefaultBackend};
 #[cfg(feature = "pulse_shape")]
 use crate::pulse_shape::{PulseShape, shape_flank_fit};
 use crate::scene::{ContactCalibration, Scene};
+#[cfg(feature = "pulse_shape")]
+use crate::short_pulse::{SHORT_SAMPLES, short_shape_fit};
 
 /// Samples kept before the trigger and added to the pulse.
 pub const PRE_TRIGGER: usize = 32;
@@ -1282,6 +1290,14 @@ impl<M: Backend> Detector<M> {
             return reject(RejectReason::Misshapen);
         }
         let ([_, before], [after, _]) = (p.before_max, p.after_max);
+        let trigger_margin = (peak - p.trigger) / (self.noise * M::sqrt(gain2));
+        #[cfg(feature = "pulse_shape")]
+        if let Some(m) = self.short_measurement(duration, trigger_margin) {
+            return Detection::Pulse {
+                at_sample,
+                outcome: Ok(m),
+            };
+        }
         let (sigma_ln_force, sigma_ln_duration) = self.stated_sigmas(&sigmas);
         Detection::Pulse {
             at_sample,
@@ -1292,11 +1308,43 @@ impl<M: Backend> Detector<M> {
                 sigma_ln_duration,
                 cov_ln: sigmas.shared - sigma_ln_force * sigma_ln_force,
                 asymmetry: crate::sampled_phase::neighbour_asymmetry(before, p.max, after),
-                trigger_margin: (peak - p.trigger) / (self.noise * M::sqrt(gain2)),
+                trigger_margin,
                 #[cfg(feature = "pulse_shape")]
-                from_flanks: false,
+                shape_fitted: false,
             }),
         }
+    }
+
+    /// A damped pulse on a rigid chain shorter than [`SHORT_SAMPLES`] (`duration`, samples,
+    /// as the fit through its top measured it) measured by its contact's shape from the five
+    /// samples about its largest ([`short_shape_fit`]), its sigmas the fit's; `None` for any
+    /// other pulse, or when the fit does not hold (the fit through the top then stands).
+    #[cfg(feature = "pulse_shape")]
+    #[inline(never)]
+    fn short_measurement(&self, duration: f32, trigger_margin: f32) -> Option<Measurement> {
+        let p = &self.pulse;
+        let rigid = self.ring_weight <= 0.0 && self.guard2 == 0;
+        if self.hertz || !rigid || duration >= SHORT_SAMPLES || p.after_count < 2 {
+            return None;
+        }
+        let ([b0, b1], [a0, a1]) = (p.before_max, p.after_max);
+        let fit = short_shape_fit(
+            &[b0, b1, p.max, a0, a1],
+            self.noise,
+            &self.pulse_shape,
+            duration,
+        )?;
+        let [f2, t2, cov] = fit.gains;
+        Some(Measurement {
+            peak_force_n: fit.peak * self.force_per_count_n,
+            duration_s: fit.duration * self.dt_s,
+            sigma_ln_force: M::sqrt(f2),
+            sigma_ln_duration: M::sqrt(t2),
+            cov_ln: cov,
+            asymmetry: 0.0,
+            trigger_margin,
+            shape_fitted: true,
+        })
     }
 
     /// Why the finished, unclipped pulse cannot be measured before any fit: a lone sample
@@ -1559,7 +1607,7 @@ impl<M: Backend> Detector<M> {
                 asymmetry: 0.0,
                 trigger_margin: f32::INFINITY,
                 #[cfg(feature = "pulse_shape")]
-                from_flanks: true,
+                shape_fitted: true,
             }),
         })
     }

@@ -36,6 +36,8 @@ pub mod settle;
 #[cfg(all(feature = "settle", feature = "pulse_shape"))]
 pub mod settle_clip;
 pub mod shape_fit;
+#[cfg(feature = "pulse_shape")]
+pub mod short_pulse;
 pub mod thornton;
 
 pub use chain_bias::ChainBias;

@@ -12,7 +12,9 @@
 use crate::chain_residual::KINK_SAMPLES;
 use crate::error::Error;
 use crate::hertz::CONTACT_TIME_FACTOR;
-use crate::shape_fit::{C_AREA, FlankChain, FlankFit, Flanks, flank_gains, gauss_newton_of};
+use crate::shape_fit::{
+    C_AREA, FlankChain, FlankFit, Flanks, descend, flank_gains, gauss_newton_of,
+};
 
 /// Points of a [`PulseShape`] over `u = 0..=1`, `u_j = j / (SHAPE_POINTS - 1)`.
 pub const SHAPE_POINTS: usize = 65;
@@ -224,15 +226,9 @@ const SCAN: usize = 16;
 /// Positions of the peak across the clipped run the flank fit tries with each duration.
 const PLACES: usize = 8;
 
-/// Gauss-Newton steps of the flank fit, at most.
-const STEPS: usize = 32;
-
 /// Fits of a clipped pulse's flanks after the first, at most, each reading the flank samples
 /// as the last left them (`ShapeFit::read_at`).
 const READINGS: usize = 3;
-
-/// Halvings of a Gauss-Newton step that does not lower the residual, at most.
-const HALVINGS: usize = 6;
 
 /// Samples of a contact the flank fit sums at most ([`shape_flank_fit`]'s fifth row); a
 /// longer one is not fitted.
@@ -259,7 +255,7 @@ const SUM_SAMPLES: usize = 8192;
 /// of `SCAN` durations between the span of the flank samples that see force (`run + 3` when
 /// all four do), and twice the sum over
 /// `level x area`, each with its peak at `PLACES` places across the run (`scan_start`),
-/// then takes up to `STEPS` Gauss-Newton steps, each halved until it lowers the residual
+/// then takes up to 32 Gauss-Newton steps, each halved until it lowers the residual
 /// (`F_peak` kept above half its value, the peak within the run, the clipped samples inside
 /// the contact, `r` within the scan's range). The duration it reports is the
 /// detector's, `area t_c / C_AREA` (the area over `C_AREA F_peak`). `None` when the fit does
@@ -351,7 +347,7 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
     };
     let kept = keep(start, 0.0);
     let mut fit = fit.read_at(kept).weighted(kept)?;
-    let mut p = descend(&fit, kept, &keep)?;
+    let mut p = descend_flanks(&fit, kept, &keep)?;
     // A flank sample that the fit moved into an end interval the reach leaves out: again,
     // without reading it (`accepted` takes the last fit only when the samples it reads stay
     // the same).
@@ -361,44 +357,20 @@ pub fn shape_flank_fit(flanks: &Flanks, noise: f32, shape: &PulseShape) -> Optio
             break;
         }
         fit = again.weighted(p)?;
-        p = descend(&fit, p, &keep)?;
+        p = descend_flanks(&fit, p, &keep)?;
     }
     accepted(&fit, p, level, range)
 }
 
-/// Up to [`STEPS`] Gauss-Newton steps of `fit` from `p`, each halved until it lowers the
-/// residual (the steep rise of a damped pulse can throw a full step off the pulse) and kept
-/// in range by `keep(step, floor)`; none that does: converged. The point it reaches.
-fn descend(
+/// The descent of `fit` from `p` ([`descend`]), over the flank samples it reads and its
+/// extra rows ([`ShapeFit::residual`]), kept in range by `keep`: the point it reaches.
+fn descend_flanks(
     fit: &ShapeFit,
-    mut p: [f32; 3],
+    p: [f32; 3],
     keep: &impl Fn([f32; 3], f32) -> [f32; 3],
 ) -> Option<[f32; 3]> {
-    let (mut best, mut rows) = fit.residual(p)?;
-    for _ in 0..STEPS {
-        let (ks, ys) = fit.read();
-        let (next, _, _) = gauss_newton_of(ks, ys, p, fit.g(), &rows)?;
-        let mut scale = 1.0;
-        let mut moved = false;
-        for _ in 0..HALVINGS {
-            let ([a, b, c], [na, nb, nc]) = (p, next);
-            let step = [
-                a + scale * (na - a),
-                b + scale * (nb - b),
-                c + scale * (nc - c),
-            ];
-            let q = keep(step, 0.5 * a);
-            if let Some((e, at_q)) = fit.residual(q).filter(|&(e, _)| e < best) {
-                (p, best, rows, moved) = (q, e, at_q, true);
-                break;
-            }
-            scale *= 0.5;
-        }
-        if !moved {
-            break;
-        }
-    }
-    Some(p)
+    let residual = |q| fit.residual(q);
+    descend(fit.read(), p, fit.g(), residual, keep).map(|(p, _)| p)
 }
 
 /// The fit at `p = [F_peak, k_peak, r]` when it describes a clipped pulse of the table's

@@ -280,6 +280,55 @@ pub(crate) fn gauss_newton_of(
     Some(([p[0] + step[0], p[1] + step[1], p[2] + step[2]], inv, c))
 }
 
+/// Gauss-Newton steps of [`descend`], at most.
+#[cfg(feature = "pulse_shape")]
+pub(crate) const STEPS: usize = 32;
+
+/// Halvings of a Gauss-Newton step that does not lower the residual, at most.
+#[cfg(feature = "pulse_shape")]
+pub(crate) const HALVINGS: usize = 6;
+
+/// Up to [`STEPS`] Gauss-Newton steps ([`gauss_newton_of`]) from `p = [F_max, k_peak, d]`
+/// over the samples `ys` at `ks` and the weighted extra rows that `residual(p)` builds with
+/// the residual sum of squares at `p`, each halved until it lowers that residual (the steep
+/// flank of a damped pulse can throw a full step off the pulse) and kept in range by
+/// `keep(step, floor)` (`floor`: half the current `F_max`); none that does: converged. The
+/// point reached and its residual; `None` for singular normal equations, or a residual not
+/// taken at `p`.
+#[cfg(feature = "pulse_shape")]
+pub(crate) fn descend<const R: usize>(
+    (ks, ys): (&[f32], &[f32]),
+    mut p: [f32; 3],
+    shape: impl Fn(f32) -> (f32, f32),
+    residual: impl Fn([f32; 3]) -> Option<(f32, [[f32; 4]; R])>,
+    keep: impl Fn([f32; 3], f32) -> [f32; 3],
+) -> Option<([f32; 3], f32)> {
+    let (mut best, mut rows) = residual(p)?;
+    for _ in 0..STEPS {
+        let (next, _, _) = gauss_newton_of(ks, ys, p, &shape, &rows)?;
+        let mut scale = 1.0;
+        let mut moved = false;
+        for _ in 0..HALVINGS {
+            let ([a, b, c], [na, nb, nc]) = (p, next);
+            let step = [
+                a + scale * (na - a),
+                b + scale * (nb - b),
+                c + scale * (nc - c),
+            ];
+            let q = keep(step, 0.5 * a);
+            if let Some((e, at_q)) = residual(q).filter(|&(e, _)| e < best) {
+                (p, best, rows, moved) = (q, e, at_q, true);
+                break;
+            }
+            scale *= 0.5;
+        }
+        if !moved {
+            break;
+        }
+    }
+    Some((p, best))
+}
+
 /// The Gauss-Newton normal equations of `F_max g(d (k - k_peak))` (the template `shape(x) =
 /// (g, dg/dx)`: [`peak_shape`], or a contact's tabulated pulse about its peak,
 /// `crate::pulse_shape::shape_flank_fit`) at

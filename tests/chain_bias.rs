@@ -75,7 +75,7 @@ fn a_tolerance_lowers_the_posterior_and_keeps_the_class() {
             asymmetry: 0.0,
             trigger_margin: f32::INFINITY,
             #[cfg(feature = "pulse_shape")]
-            from_flanks: false,
+            shape_fitted: false,
         };
         let (a, b) = (exact.classify(&m), known.classify(&m));
         assert_eq!(a.forced_choice(), b.forced_choice());

@@ -23,7 +23,7 @@ fn exact(mat: Material, r: f64, u: f64) -> Measurement {
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
         #[cfg(feature = "pulse_shape")]
-        from_flanks: false,
+        shape_fitted: false,
     }
 }
 
@@ -51,7 +51,7 @@ fn inversion_round_trip_over_the_scene() {
                     asymmetry: 0.0,
                     trigger_margin: f32::INFINITY,
                     #[cfg(feature = "pulse_shape")]
-                    from_flanks: false,
+                    shape_fitted: false,
                 };
                 let inv = scene.invert(ci, &m).unwrap();
                 assert!(
@@ -187,7 +187,7 @@ fn bad_measurements_are_rejected_not_panicking() {
             asymmetry: 0.0,
             trigger_margin: f32::INFINITY,
             #[cfg(feature = "pulse_shape")]
-            from_flanks: false,
+            shape_fitted: false,
         };
         assert_eq!(
             scene.classify(&m),
@@ -209,7 +209,7 @@ fn a_pulse_near_its_trigger_is_ambiguous() {
         cov_ln: -1e-4,
         trigger_margin: coalshock::TRIGGER_MARGIN,
         #[cfg(feature = "pulse_shape")]
-        from_flanks: false,
+        shape_fitted: false,
         ..exact(Material::SANDSTONE, 0.03, 4.5)
     };
     let Verdict::Class { class, posterior } = scene.classify(&clear) else {
@@ -220,7 +220,7 @@ fn a_pulse_near_its_trigger_is_ambiguous() {
         let near = Measurement {
             trigger_margin: margin,
             #[cfg(feature = "pulse_shape")]
-            from_flanks: false,
+            shape_fitted: false,
             ..clear
         };
         assert_eq!(

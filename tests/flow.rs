@@ -95,7 +95,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
             asymmetry: 0.0,
             trigger_margin: f32::INFINITY,
             #[cfg(feature = "pulse_shape")]
-            from_flanks: false,
+            shape_fitted: false,
         };
         let (v, lls) = scene.classify_with_likelihoods(&m);
         assert_eq!(v, scene.classify(&m));
@@ -110,7 +110,7 @@ fn classify_with_likelihoods_gives_classify_s_verdict() {
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
         #[cfg(feature = "pulse_shape")]
-        from_flanks: false,
+        shape_fitted: false,
     };
     assert_eq!(scene.classify_with_likelihoods(&bad).1, None);
 }

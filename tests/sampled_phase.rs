@@ -118,7 +118,7 @@ fn the_duration_noise_moves_the_sampling_correction_and_is_stated() {
         asymmetry: 0.0,
         trigger_margin: f32::INFINITY,
         #[cfg(feature = "pulse_shape")]
-        from_flanks: false,
+        shape_fitted: false,
     };
     let stated = scene.hertz_equivalent(&m);
     let mut rng = common::Rng::new(0x51A7_E5EE_D5EE_D001);
