@@ -131,13 +131,15 @@ print("| law | e | rate (Hz) | noise (counts) | priors coal : gangue | forced ch
 print("|---|---|---|---|---|---|---|---|---|---|---|---|")
 print("\n".join(rows))
 EOF
-# Where the misses come from: the kernel's fit on damped pulses of a few samples.
+# The sampling correction: the kernel's fit through the top on damped pulses of a few samples.
 {
     echo
-    echo "## Where the misses come from"
+    echo "## The sampling correction"
     echo
     echo "\`cargo run --release -p host-sim --example sampled_phase -- LAW E\` (its module docs say how)."
-    echo "Each block: the damped pulse's duration from the area (what the detector measures) over"
+    echo "Below 7.8 samples per pulse the kernel measures a damped pulse on a rigid beam by its"
+    echo "contact's shape (\`src/short_pulse.rs\`) and keeps the fit through the top, with this"
+    echo "correction, where that fit does not hold (two samples see the pulse). Each block: the damped pulse's duration from the area (what the detector measures) over"
     echo "the Hertz contact time (the kernel asks 1.6 samples of it, and 2.5 of the Hertz time); then the root mean square of"
     echo "the kernel's fit error of \`ln F_max\` and \`ln t_c\` that a correction by samples per pulse"
     echo "alone leaves (the phase of the samples), and what a table over samples per pulse and the"
