@@ -1323,8 +1323,7 @@ impl<M: Backend> Detector<M> {
     #[inline(never)]
     fn short_measurement(&self, duration: f32, trigger_margin: f32) -> Option<Measurement> {
         let p = &self.pulse;
-        let rigid = self.ring_weight <= 0.0 && self.guard2 == 0;
-        if self.hertz || !rigid || duration >= SHORT_SAMPLES || p.after_count < 2 {
+        if self.hertz || !self.rigid() || duration >= SHORT_SAMPLES || p.after_count < 2 {
             return None;
         }
         let ([b0, b1], [a0, a1]) = (p.before_max, p.after_max);
@@ -1334,17 +1333,33 @@ impl<M: Backend> Detector<M> {
             &self.pulse_shape,
             duration,
         )?;
-        let [f2, t2, cov] = fit.gains;
-        Some(Measurement {
+        // The rows were weighted: the gains are the variances.
+        Some(self.shape_measurement(&fit, 1.0, 0.0, trigger_margin))
+    }
+
+    /// The measurement of a pulse by a fit of its shape (a clipped pulse's flank fit, or a
+    /// short pulse's, [`FlankFit`]): its peak and duration the continuous pulse's, their
+    /// variances the fit's gains times `variance` (counts^2) with the template's own error
+    /// `floor2` (log units squared), and `trigger_margin`.
+    fn shape_measurement(
+        &self,
+        fit: &FlankFit,
+        variance: f32,
+        floor2: f32,
+        trigger_margin: f32,
+    ) -> Measurement {
+        let [f2, t2, cov] = fit.gains.map(|g| g * variance);
+        Measurement {
             peak_force_n: fit.peak * self.force_per_count_n,
             duration_s: fit.duration * self.dt_s,
-            sigma_ln_force: M::sqrt(f2),
-            sigma_ln_duration: M::sqrt(t2),
+            sigma_ln_force: M::sqrt(f2 + floor2),
+            sigma_ln_duration: M::sqrt(t2 + floor2),
             cov_ln: cov,
             asymmetry: 0.0,
             trigger_margin,
+            #[cfg(feature = "pulse_shape")]
             shape_fitted: true,
-        })
+        }
     }
 
     /// Why the finished, unclipped pulse cannot be measured before any fit: a lone sample
@@ -1593,22 +1608,11 @@ impl<M: Backend> Detector<M> {
     /// its run's first sample); `None` when the fit fails.
     fn flank_detection(&self, flanks: &Flanks, first: u64) -> Option<Detection> {
         let (fit, noise2, floor2) = self.fit_flanks(flanks)?;
-        let [f2, t2, cov] = fit.gains.map(|g| g * noise2);
         Some(Detection::Pulse {
             // The sample nearest the fitted peak (within the run; through u32, which the FPU
             // converts, where a u64 would call a library routine).
             at_sample: first + u64::from((fit.peak_at + 0.5).max(0.0) as u32),
-            outcome: Ok(Measurement {
-                peak_force_n: fit.peak * self.force_per_count_n,
-                duration_s: fit.duration * self.dt_s,
-                sigma_ln_force: M::sqrt(f2 + floor2),
-                sigma_ln_duration: M::sqrt(t2 + floor2),
-                cov_ln: cov,
-                asymmetry: 0.0,
-                trigger_margin: f32::INFINITY,
-                #[cfg(feature = "pulse_shape")]
-                shape_fitted: true,
-            }),
+            outcome: Ok(self.shape_measurement(&fit, noise2, floor2, f32::INFINITY)),
         })
     }
 
@@ -1795,6 +1799,11 @@ impl<M: Backend> Detector<M> {
         if self.pulse_shape.is_some() {
             return true;
         }
+        self.rigid()
+    }
+
+    /// Whether the chain is rigid (the equaliser the identity: nothing rings, no FIR).
+    fn rigid(&self) -> bool {
         self.ring_weight <= 0.0
     }
 

@@ -13,7 +13,7 @@ use crate::chain_residual::KINK_SAMPLES;
 use crate::error::Error;
 use crate::hertz::CONTACT_TIME_FACTOR;
 use crate::shape_fit::{
-    C_AREA, FlankChain, FlankFit, Flanks, descend, flank_gains, gauss_newton_of,
+    C_AREA, FlankChain, FlankFit, Flanks, amplitude_fit, descend, flank_gains, gauss_newton_of,
 };
 
 /// Points of a [`PulseShape`] over `u = 0..=1`, `u_j = j / (SHAPE_POINTS - 1)`.
@@ -455,7 +455,7 @@ fn accepted(
 }
 
 /// Whether `u` lies in the table's first or last interval, inside the contact.
-fn in_end_interval(u: f32) -> bool {
+pub(crate) fn in_end_interval(u: f32) -> bool {
     u > 0.0 && u < 1.0 && !(SHAPE_STEP..=1.0 - SHAPE_STEP).contains(&u)
 }
 
@@ -763,18 +763,9 @@ fn scan_start(
         let r = r_lo + (r_hi - r_lo) * jr / (SCAN - 1) as f32;
         let at = -0.5 + run * (jp + 0.5) / PLACES as f32;
         let gs = ks.map(|k| shape.at(r * (k - at) + shape.peak_at).0);
-        let (yg, gg) = gs
-            .iter()
-            .zip(ys)
-            .fold((0.0f32, 0.0f32), |(a, b), (&g, &y)| (a + y * g, b + g * g));
-        if gg <= 0.0 {
+        let Some((peak, rss)) = amplitude_fit(&gs, ys) else {
             continue;
-        }
-        let peak = yg / gg;
-        let rss = gs
-            .iter()
-            .zip(ys)
-            .fold(0.0f32, |a, (&g, &y)| a + (y - peak * g) * (y - peak * g));
+        };
         if best.is_none_or(|(_, b)| rss < b) {
             best = Some(([peak, at, r], rss));
         }

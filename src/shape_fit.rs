@@ -280,6 +280,26 @@ pub(crate) fn gauss_newton_of(
     Some(([p[0] + step[0], p[1] + step[1], p[2] + step[2]], inv, c))
 }
 
+/// The least-squares amplitude of the template's values `gs` to the samples `ys`,
+/// `F = sum y g / sum g^2` (counts), and the residual sum of squares `sum (y - F g)^2` it
+/// leaves; `None` where the template is 0 at every sample.
+#[cfg(feature = "pulse_shape")]
+pub(crate) fn amplitude_fit(gs: &[f32], ys: &[f32]) -> Option<(f32, f32)> {
+    let (yg, gg) = gs
+        .iter()
+        .zip(ys)
+        .fold((0.0f32, 0.0f32), |(a, b), (&g, &y)| (a + y * g, b + g * g));
+    if gg <= 0.0 {
+        return None;
+    }
+    let peak = yg / gg;
+    let rss = gs
+        .iter()
+        .zip(ys)
+        .fold(0.0f32, |a, (&g, &y)| a + (y - peak * g) * (y - peak * g));
+    Some((peak, rss))
+}
+
 /// Gauss-Newton steps of [`descend`], at most.
 #[cfg(feature = "pulse_shape")]
 pub(crate) const STEPS: usize = 32;

@@ -9,9 +9,10 @@
 //! `F_peak`. Its peak and duration are the continuous pulse's, as the flank fit of a clipped
 //! pulse gives them ([`crate::pulse_shape::shape_flank_fit`]).
 
-use crate::pulse_shape::{PulseShape, SHAPE_STEP};
+use crate::pulse_shape::{PulseShape, in_end_interval};
 use crate::shape_fit::{
-    C_AREA, FIVE_POINT_STEP, FlankFit, PEAK_OMEGA, descend, flank_gains, gauss_newton_of,
+    C_AREA, FIVE_POINT_STEP, FlankFit, PEAK_OMEGA, amplitude_fit, descend, flank_gains,
+    gauss_newton_of,
 };
 
 /// Samples per pulse (the duration a fit through the top measures, `t_c` from the area) below
@@ -29,6 +30,11 @@ const SCAN: usize = 16;
 
 /// Peak places the start scans per inverse duration, evenly over `-1..=1` samples.
 const PLACES: usize = 9;
+
+/// How far the descent may take `r` from `r0` (a factor either way), and the peak from the
+/// largest sample (samples).
+const R_SPAN: f32 = 4.0;
+const AT_SPAN: f32 = 1.5;
 
 /// Descents, each from the best start of its band of inverse durations.
 const STARTS: usize = 4;
@@ -121,7 +127,7 @@ impl Short<'_> {
             u if u <= 0.0 || u >= 1.0 => 0.0,
             u if u < lo => self.shape.at(lo).0,
             u if u > hi => self.shape.at(hi).0,
-            u if !(SHAPE_STEP..=1.0 - SHAPE_STEP).contains(&u) => ends,
+            u if in_end_interval(u) => ends,
             _ => inner,
         };
         (peak * g, [g, -peak * r * slope, peak * t * slope], error)
@@ -130,29 +136,27 @@ impl Short<'_> {
     /// The five weighted rows at `p`, `[dm/dp, y - m] / sigma` with `sigma^2 = noise^2 +
     /// (error F_peak)^2`, and their residual sum of squares.
     fn rows(&self, p: [f32; 3]) -> (f32, [[f32; 4]; 5]) {
-        let mut rss = 0.0;
-        let rows = core::array::from_fn(|i| {
-            let (k, y) = (KS.get(i).copied(), self.ys.get(i).copied());
-            let (k, y) = (k.unwrap_or(0.0), y.unwrap_or(0.0));
+        let (mut rss, mut rows) = (0.0, [[0.0; 4]; 5]);
+        for ((row, &k), &y) in rows.iter_mut().zip(&KS).zip(self.ys) {
             let (m, [g0, g1, g2], error) = self.model(p, k);
             let e = error * p[0];
             let w = 1.0 / libm::sqrtf(self.noise * self.noise + e * e);
             let res = w * (y - m);
             rss += res * res;
-            [w * g0, w * g1, w * g2, res]
-        });
+            *row = [w * g0, w * g1, w * g2, res];
+        }
         (rss, rows)
     }
 
     /// The descent ([`descend`]) from `start` over the five weighted rows ([`Self::rows`]),
-    /// kept within `r0 / 4..4 r0` and 1.5 samples of the largest, `F_peak` above half its
-    /// value: the point reached and its residual.
+    /// kept within `r0 / R_SPAN..R_SPAN r0` and [`AT_SPAN`] samples of the largest, `F_peak`
+    /// above half its value: the point reached and its residual.
     fn descend(&self, start: [f32; 3], r0: f32) -> Option<([f32; 3], f32)> {
         let keep = |[peak, at, r]: [f32; 3], floor: f32| {
             [
                 peak.max(floor),
-                at.clamp(-1.5, 1.5),
-                r.clamp(0.25 * r0, 4.0 * r0),
+                at.clamp(-AT_SPAN, AT_SPAN),
+                r.clamp(r0 / R_SPAN, R_SPAN * r0),
             ]
         };
         let residual = |p| Some(self.rows(p));
@@ -169,21 +173,12 @@ impl Short<'_> {
             let r = r0 * libm::exp2f(2.0 * jr as f32 / (SCAN - 1) as f32 - 1.0);
             let at = 2.0 * jp / (PLACES - 1) as f32 - 1.0;
             let gs = KS.map(|k| (self.g())(r * (k - at)).0);
-            let (yg, gg) = gs
-                .iter()
-                .zip(self.ys)
-                .fold((0.0f32, 0.0f32), |(a, b), (&g, &y)| (a + y * g, b + g * g));
-            let Some(band) = best.get_mut(jr * STARTS / SCAN) else {
+            let (Some(band), Some((peak, rss))) = (
+                best.get_mut(jr * STARTS / SCAN),
+                amplitude_fit(&gs, self.ys),
+            ) else {
                 continue;
             };
-            if gg <= 0.0 {
-                continue;
-            }
-            let peak = yg / gg;
-            let rss = gs
-                .iter()
-                .zip(self.ys)
-                .fold(0.0f32, |a, (&g, &y)| a + (y - peak * g) * (y - peak * g));
             if peak > 0.0 && band.is_none_or(|(_, b)| rss < b) {
                 *band = Some(([peak, at, r], rss));
             }
@@ -194,7 +189,9 @@ impl Short<'_> {
     /// The fit at `p` with residual `rss` when it holds (see [`short_shape_fit`]).
     fn accepted(&self, p: [f32; 3], rss: f32, r0: f32) -> Option<FlankFit> {
         let [peak, at, r] = p;
-        let free = r > 0.2501 * r0 && r < 3.999 * r0 && at.abs() < 1.499;
+        // Not held at the bounds the descent keeps it in.
+        let free =
+            r > 1.0004 * r0 / R_SPAN && r < 0.99975 * R_SPAN * r0 && at.abs() < AT_SPAN - 0.001;
         if !(free && rss <= RSS_MAX) {
             return None;
         }
