@@ -12,9 +12,22 @@
 //! signal). The parameters `theta = (a, c, t_0, b)` are `a = ln F_max - ln F_max0` and
 //! `c = ln t_c - ln t_c0` (the features, shape fixed), the onset time `t_0` within the samples
 //! and the baseline `b` in counts (the two nuisance parameters). The Fisher matrix is
-//! `J_ij = sum_n (ds_n / d theta_i)(ds_n / d theta_j) / sigma^2`; the bound of the features is
-//! the upper left 2 x 2 block of `J^-1` (nuisances included: each one the estimator does not
-//! know widens the bound).
+//! `J_ij = sum_n (ds_n / d theta_i)(ds_n / d theta_j) / sigma^2`, plus the onset's support
+//! information `12 f_s^2` on `J_(t_0 t_0)` ([`onset_support_information`]); the bound of the
+//! features is the upper left 2 x 2 block of `J^-1` (nuisances included: each one the
+//! estimator does not know widens the bound).
+//!
+//! The support term is what the derivatives miss: a pulse's samples are noise alone before
+//! its onset, so where the pulse rises above the noise within its first sample (the damped
+//! laws' steep onsets) the last quiet sample and the first sample of the pulse bracket the
+//! onset within one sample interval. The derivatives cannot say so: without the term, a pulse
+//! that two samples see leaves three unknowns `(a, c, t_0)` to two equations and no bound, and
+//! a pulse whose onset is steepest (Tsuji's `delta^(1/4)` damping, an infinite slope at
+//! contact) gets a bound far wider than its samples allow. The term is the inverse variance of an onset uniform over the
+//! interval (a Gaussian of that variance claims less than the interval does). On a smooth
+//! onset in strong noise it credits the estimator with more than the samples hold, which can
+//! only raise the limit; on a pulse of many samples the derivatives say far more and it
+//! moves the bound by well under a percent.
 //!
 //! The derivative waveforms are computed through the chain (noise added after it):
 //! `ds / da = s` exactly, and `ds / dc`, `ds / dt_0` by central differences of the chain's
@@ -35,6 +48,14 @@ pub const STEP: f64 = 0.005;
 /// the quantisation of a 1-count ADC step).
 pub fn sample_variance_counts2(noise_rms_counts: f64) -> f64 {
     noise_rms_counts * noise_rms_counts + 1.0 / 12.0
+}
+
+/// The information on the onset `t_0` (1/s^2) that the samples' support gives besides the
+/// Fisher matrix's derivatives: `12 f_s^2`, the inverse variance of an onset uniform within
+/// the one sample interval that the last quiet sample and the first sample of the pulse
+/// bracket.
+pub fn onset_support_information(sample_rate_hz: f64) -> f64 {
+    12.0 * sample_rate_hz * sample_rate_hz
 }
 
 /// The Fisher matrix `J_ij = sum_n d_i[n] d_j[n] / variance` of the derivative waveforms
@@ -129,7 +150,8 @@ pub fn pulse_bound(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> 
     let ds_dt0 = diff(output(0.0, t0 + ht), output(0.0, t0 - ht), ht);
     let ones = vec![1.0; n];
     let variance = sample_variance_counts2(sensor.spec().noise_rms_counts);
-    let j = fisher(&[s0, ds_dc, ds_dt0, ones], variance);
+    let mut j = fisher(&[s0, ds_dc, ds_dt0, ones], variance);
+    j[2][2] += onset_support_information(sensor.sample_rate_hz());
     PulseBound {
         covariance: invert_spd(&j).map(|inv| [inv[0][0], inv[1][1], inv[0][1]]),
         snr: j[0][0].sqrt(),
@@ -259,6 +281,59 @@ mod tests {
         }
         let d = phase_averaged_bound(&sensor, &pulse, 4).snr;
         assert!((d / expected - 1.0).abs() < 1e-3, "{d} against {expected}");
+    }
+
+    #[test]
+    fn a_pulse_of_two_samples_is_bounded_by_its_onset_support() {
+        // F sin(pi tau / T)^1.5 over T = 2.5 samples with its onset 0.3 of a sample after a
+        // sample instant: two samples (tau = 0.7 and 1.7 samples) see it. Their Fisher matrix
+        // in (a, c, t_0) alone is singular (two samples, three unknowns); the support puts the
+        // onset within its sample, variance 1 / (12 f_s^2). The two samples then fix the
+        // features given the onset and the baseline (the window's 66 quiet samples give the
+        // baseline, variance sigma^2 / 66), so the bound is the linear map's:
+        // cov = D^-1 (sigma^2 I + g g^T / (12 f_s^2) + 1 1^T sigma^2 / 66) D^-T, D the 2 x 2
+        // derivatives in (a, c) and g the derivative in t_0, all in closed form.
+        let sensor = rigid(4.0);
+        let (fs, gain) = (100_000.0, sensor.counts_per_newton());
+        let (f_max, t) = (200.0, 2.5 / 100_000.0);
+        let pulse = ForcePulse {
+            start_s: 0.0,
+            duration_s: t,
+            scale: 1.0,
+            shape: PulseShape::HertzSine {
+                peak_force_n: f_max,
+            },
+        };
+        let pi = std::f64::consts::PI;
+        let h = |tau: f64| (pi * tau / t).sin().powf(1.5);
+        let dh = |tau: f64| 1.5 * (pi * tau / t).sin().sqrt() * (pi * tau / t).cos() * pi / t;
+        let taus = [0.7 / fs, 1.7 / fs];
+        let d = taus.map(|tau| [gain * f_max * h(tau), -gain * f_max * dh(tau) * tau]);
+        let g = taus.map(|tau| -gain * f_max * dh(tau));
+        let var = sample_variance_counts2(4.0);
+        let inner = |i: usize, j: usize| {
+            let diagonal = if i == j { var } else { 0.0 };
+            diagonal + g[i] * g[j] / (12.0 * fs * fs) + var / 66.0
+        };
+        let det = d[0][0] * d[1][1] - d[0][1] * d[1][0];
+        let inv = [
+            [d[1][1] / det, -d[0][1] / det],
+            [-d[1][0] / det, d[0][0] / det],
+        ];
+        let cov = |p: usize, q: usize| {
+            let mut sum = 0.0;
+            for i in 0..2 {
+                for j in 0..2 {
+                    sum += inv[p][i] * inner(i, j) * inv[q][j];
+                }
+            }
+            sum
+        };
+        let expected = [cov(0, 0), cov(1, 1), cov(0, 1)];
+        let got = feature_crb(&sensor, &pulse, 0.3).unwrap();
+        for (g, e) in got.iter().zip(expected) {
+            assert!((g / e - 1.0).abs() < 1e-3, "{got:?} against {expected:?}");
+        }
     }
 
     #[test]
