@@ -13,22 +13,22 @@
 //! `c = ln t_c - ln t_c0` (the features, shape fixed), the onset time `t_0` within the samples
 //! and the baseline `b` in counts (the two nuisance parameters). The Fisher matrix is
 //! `J_ij = sum_n (ds_n / d theta_i)(ds_n / d theta_j) / sigma^2`, plus the onset's support
-//! information `12 f_s^2` on `J_(t_0 t_0)` ([`onset_support_information`]); the bound of the
+//! information `12 / w^2` on `J_(t_0 t_0)` ([`onset_support_information`]); the bound of the
 //! features is the upper left 2 x 2 block of `J^-1` (nuisances included: each one the
 //! estimator does not know widens the bound).
 //!
-//! The support term is what the derivatives miss: a pulse's samples are noise alone before
-//! its onset, so where the pulse rises above the noise within its first sample (the damped
-//! laws' steep onsets) the last quiet sample and the first sample of the pulse bracket the
-//! onset within one sample interval. The derivatives cannot say so: without the term, a pulse
-//! that two samples see leaves three unknowns `(a, c, t_0)` to two equations and no bound, and
-//! a pulse whose onset is steepest (Tsuji's `delta^(1/4)` damping, an infinite slope at
-//! contact) gets a bound far wider than its samples allow. The term is the inverse variance of an onset uniform over the
-//! interval (a Gaussian of that variance claims less than the interval does). On a smooth
-//! onset in strong noise it credits the estimator with more than the samples hold, which can
-//! only raise the limit; on a pulse of many samples the derivatives say far more and it
-//! moves the bound by well under a percent.
-//!
+//! The support term is what the derivatives miss. A pulse's samples read noise alone before
+//! its onset; the first sample whose noiseless output stands [`VISIBLE_SIGMAS`] noise RMS from
+//! the baseline, `w` after the onset, brackets the onset within `w` (at least one sample interval:
+//! [`onset_bracket_s`]). Without the term, a pulse that two samples see leaves three unknowns
+//! `(a, c, t_0)` to two equations and no bound, though its first sample places its onset
+//! within a sample; and a pulse whose onset is steepest (Tsuji's `delta^(1/4)` damping, an
+//! infinite slope at contact) gets a bound far wider than its samples allow. The term is the
+//! inverse variance of an onset uniform over the bracket (a Gaussian of that variance claims
+//! less than the bracket does). A smooth onset in strong noise rises above the noise late,
+//! so its bracket is wide and the term small; on a pulse of many samples above the noise the
+//! derivatives say far more and the term moves the bound by well under a percent.
+
 //! The derivative waveforms are computed through the chain (noise added after it):
 //! `ds / da = s` exactly, and `ds / dc`, `ds / dt_0` by central differences of the chain's
 //! output with the time scale and the onset moved by `+- STEP` of the pulse's duration;
@@ -41,6 +41,11 @@ use crate::sim::sensor::{FnForce, ForcePulse, Sensor};
 /// Quiet samples in the window before a pulse's onset (the kernel's pre-trigger ring holds 32).
 pub const MARGIN_SAMPLES: usize = 32;
 
+/// How far from the baseline, in noise RMS, a sample's noiseless output must stand to mark a
+/// pulse's onset ([`onset_bracket_s`]): where one sample tells a pulse from the noise with an
+/// error of `Q(1)` (16 %), the midpoint between 0 and it standing one RMS on either side.
+pub const VISIBLE_SIGMAS: f64 = 2.0;
+
 /// Relative step of the central differences in the time scale and the onset (of `t_c`).
 pub const STEP: f64 = 0.005;
 
@@ -51,11 +56,36 @@ pub fn sample_variance_counts2(noise_rms_counts: f64) -> f64 {
 }
 
 /// The information on the onset `t_0` (1/s^2) that the samples' support gives besides the
-/// Fisher matrix's derivatives: `12 f_s^2`, the inverse variance of an onset uniform within
-/// the one sample interval that the last quiet sample and the first sample of the pulse
-/// bracket.
-pub fn onset_support_information(sample_rate_hz: f64) -> f64 {
-    12.0 * sample_rate_hz * sample_rate_hz
+/// Fisher matrix's derivatives: `12 / w^2`, the inverse variance of an onset uniform within
+/// a bracket of `bracket_s` = `w` s ([`onset_bracket_s`]; 0 for an unbounded bracket).
+pub fn onset_support_information(bracket_s: f64) -> f64 {
+    if bracket_s.is_finite() && bracket_s > 0.0 {
+        12.0 / (bracket_s * bracket_s)
+    } else {
+        0.0
+    }
+}
+
+/// The bracket (s) within which the samples place a pulse's onset at `onset_s`: from the onset
+/// to the first sample after it whose noiseless output `output` (counts, sample `n` at
+/// `n / sample_rate_hz`) stands `visible_counts` or more from the baseline ([`VISIBLE_SIGMAS`]
+/// noise RMS in [`pulse_bound`]), and never less than one sample interval. The samples before
+/// that one hardly differ from the noise, so they cannot say where within the bracket the
+/// onset lies. Infinite when no sample stands so high.
+pub fn onset_bracket_s(
+    output: &[f64],
+    onset_s: f64,
+    sample_rate_hz: f64,
+    visible_counts: f64,
+) -> f64 {
+    output
+        .iter()
+        .enumerate()
+        .map(|(n, v)| (n as f64 / sample_rate_hz, v))
+        .find(|&(t, v)| t > onset_s && v.abs() >= visible_counts)
+        .map_or(f64::INFINITY, |(t, _)| {
+            (t - onset_s).max(1.0 / sample_rate_hz)
+        })
 }
 
 /// The Fisher matrix `J_ij = sum_n d_i[n] d_j[n] / variance` of the derivative waveforms
@@ -150,8 +180,10 @@ pub fn pulse_bound(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> 
     let ds_dt0 = diff(output(0.0, t0 + ht), output(0.0, t0 - ht), ht);
     let ones = vec![1.0; n];
     let variance = sample_variance_counts2(sensor.spec().noise_rms_counts);
+    let visible_counts = VISIBLE_SIGMAS * variance.sqrt();
+    let bracket_s = onset_bracket_s(&s0, t0, sensor.sample_rate_hz(), visible_counts);
     let mut j = fisher(&[s0, ds_dc, ds_dt0, ones], variance);
-    j[2][2] += onset_support_information(sensor.sample_rate_hz());
+    j[2][2] += onset_support_information(bracket_s);
     PulseBound {
         covariance: invert_spd(&j).map(|inv| [inv[0][0], inv[1][1], inv[0][1]]),
         snr: j[0][0].sqrt(),
@@ -288,7 +320,8 @@ mod tests {
         // F sin(pi tau / T)^1.5 over T = 2.5 samples with its onset 0.3 of a sample after a
         // sample instant: two samples (tau = 0.7 and 1.7 samples) see it. Their Fisher matrix
         // in (a, c, t_0) alone is singular (two samples, three unknowns); the support puts the
-        // onset within its sample, variance 1 / (12 f_s^2). The two samples then fix the
+        // onset within its sample (the first sample stands far beyond the noise), variance
+        // 1 / (12 f_s^2). The two samples then fix the
         // features given the onset and the baseline (the window's 66 quiet samples give the
         // baseline, variance sigma^2 / 66), so the bound is the linear map's:
         // cov = D^-1 (sigma^2 I + g g^T / (12 f_s^2) + 1 1^T sigma^2 / 66) D^-T, D the 2 x 2
@@ -334,6 +367,22 @@ mod tests {
         for (g, e) in got.iter().zip(expected) {
             assert!((g / e - 1.0).abs() < 1e-3, "{got:?} against {expected:?}");
         }
+    }
+
+    #[test]
+    fn onset_bracket_runs_to_the_first_sample_clear_of_the_noise() {
+        // Samples at n / 10 Hz, the onset at 0.32 s, the level 2: sample 4 (0.4 s) reads 1.5
+        // (within it), sample 5 reads -2.5 (beyond it), so the onset lies within 0.18 s before
+        // sample 5 and the information is 12 / 0.18^2. A first sample beyond the level gives
+        // one sample interval (not the 0.08 s to it), and no sample beyond it no bound.
+        let out = [0.0, 0.0, 0.0, 9.0, 1.5, -2.5, 4.0];
+        let w = onset_bracket_s(&out, 0.32, 10.0, 2.0);
+        assert!((w - 0.18).abs() < 1e-12, "{w}");
+        assert!((onset_support_information(w) - 12.0 / 0.0324).abs() < 1e-9);
+        let steep = [0.0, 0.0, 0.0, 0.0, 3.0, 1.0];
+        assert!((onset_bracket_s(&steep, 0.32, 10.0, 2.0) - 0.1).abs() < 1e-12);
+        assert!(onset_bracket_s(&[0.0, 1.0, -1.9], 0.05, 10.0, 2.0).is_infinite());
+        assert_eq!(onset_support_information(f64::INFINITY), 0.0);
     }
 
     #[test]

@@ -20,8 +20,8 @@
 //!    speed), need no calibration: the integrator gives their features directly.
 //! 2. **Measurement noise.** At each grid impact the Cramér-Rao bound of `f` for the sampled
 //!    pulse through the scene's chain in the scene's noise ([`crate::score::crb`]), with the
-//!    onset known within its sample interval (the samples' support), averaged over the
-//!    onset's phase within a sample: the covariance `S(z)` no unbiased estimator beats.
+//!    onset known within the bracket its first sample above the noise sets (the samples'
+//!    support), averaged over the onset's phase within a sample: the covariance `S(z)` no unbiased estimator beats.
 //! 3. **Interpolation.** Between grid points the deviation `d(z) = f(z) - (c + A z)` from the
 //!    Hertz power laws (`A = [[2, 6/5], [1, -1/5]]`, zero for Hertz, a constant for the
 //!    restitution-parametrised laws), `ln sigma` of both features and their correlation are
