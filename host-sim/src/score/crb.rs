@@ -19,8 +19,8 @@
 //!
 //! The support term is what the derivatives miss. A pulse's samples read noise alone before
 //! its onset; the first sample whose noiseless output stands [`VISIBLE_SIGMAS`] noise RMS from
-//! the baseline, `w` after the onset, brackets the onset within `w` (at least one sample interval:
-//! [`onset_bracket_s`]). Without the term, a pulse that two samples see leaves three unknowns
+//! the baseline, `w` after the onset, brackets the onset within `w` (at least one sample
+//! interval: [`onset_bracket_s`]). Without the term, a pulse that two samples see leaves three unknowns
 //! `(a, c, t_0)` to two equations and no bound, though its first sample places its onset
 //! within a sample; and a pulse whose onset is steepest (Tsuji's `delta^(1/4)` damping, an
 //! infinite slope at contact) gets a bound far wider than its samples allow. The term is the
@@ -28,7 +28,13 @@
 //! less than the bracket does). A smooth onset in strong noise rises above the noise late,
 //! so its bracket is wide and the term small; on a pulse of many samples above the noise the
 //! derivatives say far more and the term moves the bound by well under a percent.
-
+//!
+//! The ADC reads each sample within its range (`sensor.adc_bits`, about `dc_offset_counts`):
+//! a value beyond a limit reads as the limit. A sample whose mean lies near or past a limit
+//! is a censored reading and keeps the share [`censored_share`] of its information, so a
+//! clipped pulse's bound comes from its flanks and what its clipped samples still say. The
+//! drift is left out.
+//!
 //! The derivative waveforms are computed through the chain (noise added after it):
 //! `ds / da = s` exactly, and `ds / dc`, `ds / dt_0` by central differences of the chain's
 //! output with the time scale and the onset moved by `+- STEP` of the pulse's duration;
@@ -36,6 +42,7 @@
 //! `max(MARGIN_SAMPLES, duration)` after its end (the quiet samples around a pulse fix the
 //! baseline; what a chain rings beyond that window is left out).
 
+use crate::score::bayes::phi;
 use crate::sim::sensor::{FnForce, ForcePulse, Sensor};
 
 /// Quiet samples in the window before a pulse's onset (the kernel's pre-trigger ring holds 32).
@@ -86,6 +93,35 @@ pub fn onset_bracket_s(
         .map_or(f64::INFINITY, |(t, _)| {
             (t - onset_s).max(1.0 / sample_rate_hz)
         })
+}
+
+/// The share of its Fisher information about its mean that one sample keeps when the ADC
+/// reads it: a Gaussian reading of mean `mean_counts` and RMS `sigma_counts` censored to
+/// `[lo_counts, hi_counts]` (a value beyond either limit reads as the limit),
+/// `w = Phi(b) - Phi(a) - (b phi(b) - a phi(a)) + phi(a)^2 / Phi(a) + phi(b)^2 / Phi(-b)` with
+/// `a = (lo - mean) / sigma`, `b = (hi - mean) / sigma`: the expected squared score of the
+/// readings within the limits and of each limit's point mass, times `sigma^2`. 1 far within
+/// the limits, 1/2 + 1/pi at one of them, falling to 0 past it.
+pub fn censored_share(mean_counts: f64, sigma_counts: f64, lo_counts: f64, hi_counts: f64) -> f64 {
+    let (a, b) = (
+        (lo_counts - mean_counts) / sigma_counts,
+        (hi_counts - mean_counts) / sigma_counts,
+    );
+    let pdf = |x: f64| (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt();
+    let mass = |density: f64, tail: f64| {
+        if tail > 0.0 {
+            density * density / tail
+        } else {
+            0.0
+        }
+    };
+    let within = phi(b) - phi(a) - (b * pdf(b) - a * pdf(a));
+    let w = within + mass(pdf(a), phi(a)) + mass(pdf(b), phi(-b));
+    if w.is_finite() {
+        w.clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
 }
 
 /// The Fisher matrix `J_ij = sum_n d_i[n] d_j[n] / variance` of the derivative waveforms
@@ -153,7 +189,8 @@ pub struct PulseBound {
     /// The matched filter's signal-to-noise ratio `d = sqrt(sum_n s_n^2 / sigma^2)`, with `s_n`
     /// the chain's noiseless output (counts) in the white noise `sigma^2` of
     /// [`sample_variance_counts2`]: the square root of the amplitude's Fisher information
-    /// `J_aa` of the module docs (baseline known). A detector that knows the pulse's shape and
+    /// `J_aa` of the module docs (baseline known), with the ADC's limits left out (a clipped
+    /// pulse stands far above the noise all the same). A detector that knows the pulse's shape and
     /// correlates it with the samples at every offset finds it, at a false-alarm rate
     /// `Q(eta)` per offset, with probability `Phi(d - eta)` (Neyman-Pearson).
     pub snr: f64,
@@ -180,13 +217,24 @@ pub fn pulse_bound(sensor: &Sensor, pulse: &ForcePulse, onset_fraction: f64) -> 
     let ds_dt0 = diff(output(0.0, t0 + ht), output(0.0, t0 - ht), ht);
     let ones = vec![1.0; n];
     let variance = sample_variance_counts2(sensor.spec().noise_rms_counts);
-    let visible_counts = VISIBLE_SIGMAS * variance.sqrt();
-    let bracket_s = onset_bracket_s(&s0, t0, sensor.sample_rate_hz(), visible_counts);
-    let mut j = fisher(&[s0, ds_dc, ds_dt0, ones], variance);
+    let sigma = variance.sqrt();
+    let bracket_s = onset_bracket_s(&s0, t0, sensor.sample_rate_hz(), VISIBLE_SIGMAS * sigma);
+    let snr = (s0.iter().map(|v| v * v).sum::<f64>() / variance).sqrt();
+    // Each sample's rows scaled by the root of the information its ADC reading keeps.
+    let (lo, hi) = sensor.adc_range();
+    let offset = sensor.spec().dc_offset_counts;
+    let kept: Vec<f64> = s0
+        .iter()
+        .map(|&v| {
+            censored_share(v + offset, sigma, f64::from(lo) + 0.5, f64::from(hi) - 0.5).sqrt()
+        })
+        .collect();
+    let read = |d: Vec<f64>| -> Vec<f64> { d.iter().zip(&kept).map(|(v, k)| v * k).collect() };
+    let mut j = fisher(&[read(s0), read(ds_dc), read(ds_dt0), read(ones)], variance);
     j[2][2] += onset_support_information(bracket_s);
     PulseBound {
         covariance: invert_spd(&j).map(|inv| [inv[0][0], inv[1][1], inv[0][1]]),
-        snr: j[0][0].sqrt(),
+        snr,
     }
 }
 
@@ -281,6 +329,18 @@ mod tests {
         );
     }
 
+    /// `f_max sin(pi t / t_s)^(3/2)` over `t_s` s, in closed form.
+    fn hertz_sine(f_max: f64, t_s: f64) -> ForcePulse {
+        ForcePulse {
+            start_s: 0.0,
+            duration_s: t_s,
+            scale: 1.0,
+            shape: PulseShape::HertzSine {
+                peak_force_n: f_max,
+            },
+        }
+    }
+
     /// `f_max sin(pi t / t_s)` over `t_s` s, as a series of 4097 points.
     fn half_sine(f_max: f64, t_s: f64) -> ForcePulse {
         ForcePulse {
@@ -321,22 +381,15 @@ mod tests {
         // sample instant: two samples (tau = 0.7 and 1.7 samples) see it. Their Fisher matrix
         // in (a, c, t_0) alone is singular (two samples, three unknowns); the support puts the
         // onset within its sample (the first sample stands far beyond the noise), variance
-        // 1 / (12 f_s^2). The two samples then fix the
-        // features given the onset and the baseline (the window's 66 quiet samples give the
-        // baseline, variance sigma^2 / 66), so the bound is the linear map's:
+        // 1 / (12 f_s^2). The two samples then fix the features given the onset and the
+        // baseline (the window's 66 quiet samples give the baseline, variance sigma^2 / 66),
+        // so the bound is the linear map's:
         // cov = D^-1 (sigma^2 I + g g^T / (12 f_s^2) + 1 1^T sigma^2 / 66) D^-T, D the 2 x 2
         // derivatives in (a, c) and g the derivative in t_0, all in closed form.
         let sensor = rigid(4.0);
         let (fs, gain) = (100_000.0, sensor.counts_per_newton());
         let (f_max, t) = (200.0, 2.5 / 100_000.0);
-        let pulse = ForcePulse {
-            start_s: 0.0,
-            duration_s: t,
-            scale: 1.0,
-            shape: PulseShape::HertzSine {
-                peak_force_n: f_max,
-            },
-        };
+        let pulse = hertz_sine(f_max, t);
         let pi = std::f64::consts::PI;
         let h = |tau: f64| (pi * tau / t).sin().powf(1.5);
         let dh = |tau: f64| 1.5 * (pi * tau / t).sin().sqrt() * (pi * tau / t).cos() * pi / t;
@@ -383,6 +436,100 @@ mod tests {
         assert!((onset_bracket_s(&steep, 0.32, 10.0, 2.0) - 0.1).abs() < 1e-12);
         assert!(onset_bracket_s(&[0.0, 1.0, -1.9], 0.05, 10.0, 2.0).is_infinite());
         assert_eq!(onset_support_information(f64::INFINITY), 0.0);
+    }
+
+    #[test]
+    fn censored_share_is_the_expected_squared_score_of_a_clipped_reading() {
+        // Far within the limits a reading keeps all its information; at one limit 1/2 + 1/pi
+        // (the Tobit model's closed form). Elsewhere against the expected squared score of
+        // the censored model summed numerically: the readings within the limits by the
+        // midpoint rule, each limit's point mass `P` by a central difference of `ln P` in the
+        // mean.
+        assert!((censored_share(0.0, 1.0, -100.0, 100.0) - 1.0).abs() < 1e-12);
+        let at_limit = censored_share(5.0, 1.0, -100.0, 5.0);
+        assert!((at_limit - (0.5 + 1.0 / std::f64::consts::PI)).abs() < 1e-9);
+        let (lo, hi, sigma) = (-3.0, 2.0, 1.5);
+        for mean in [-4.0, -1.0, 0.0, 1.5, 2.0, 3.5, 6.0] {
+            let pdf = |y: f64| {
+                (-0.5 * ((y - mean) / sigma).powi(2)).exp()
+                    / (sigma * (2.0 * std::f64::consts::PI).sqrt())
+            };
+            let steps = 200_000;
+            let h = (hi - lo) / steps as f64;
+            let within: f64 = (0..steps)
+                .map(|k| {
+                    let y = lo + (k as f64 + 0.5) * h;
+                    ((y - mean) / (sigma * sigma)).powi(2) * pdf(y) * h
+                })
+                .sum();
+            let p_low = |m: f64| phi((lo - m) / sigma);
+            let p_high = |m: f64| phi((m - hi) / sigma);
+            let dm = 1e-5;
+            let score =
+                |p: &dyn Fn(f64) -> f64| (p(mean + dm).ln() - p(mean - dm).ln()) / (2.0 * dm);
+            let masses =
+                score(&p_low).powi(2) * p_low(mean) + score(&p_high).powi(2) * p_high(mean);
+            let expected = (within + masses) * sigma * sigma;
+            let got = censored_share(mean, sigma, lo, hi);
+            assert!(
+                (got - expected).abs() < 1e-6,
+                "mean {mean}: {got} against {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_clipped_pulse_is_bounded_by_what_its_readings_keep() {
+        // F sin(pi tau / T)^1.5 over 40 samples whose top 40 % lies past the 16-bit ADC's
+        // upper limit: the Fisher matrix of the analytic derivatives (amplitude, time scale,
+        // onset, baseline), each sample's row weighted by its censored share, and the onset's
+        // support (its first sample stands far above the noise: one sample interval). The
+        // bound is wider than the same pulse's unclipped one.
+        let sensor = rigid(4.0);
+        let (fs, gain) = (100_000.0, sensor.counts_per_newton());
+        let (f_max, t) = (60_000.0 / gain, 40.0 / 100_000.0);
+        let pulse = hertz_sine(f_max, t);
+        let phase = 0.4;
+        let pi = std::f64::consts::PI;
+        let var = sample_variance_counts2(4.0);
+        let n = MARGIN_SAMPLES + 41 + 41;
+        let t0 = (MARGIN_SAMPLES as f64 + phase) / fs;
+        let rows: Vec<[f64; 4]> = (0..n)
+            .map(|k| {
+                let tau = k as f64 / fs - t0;
+                let (s, ds) = if tau > 0.0 && tau < t {
+                    let x = pi * tau / t;
+                    let ds = 1.5 * x.sin().sqrt() * x.cos() * pi / t;
+                    (gain * f_max * x.sin().powf(1.5), gain * f_max * ds)
+                } else {
+                    (0.0, 0.0)
+                };
+                let w = censored_share(s, var.sqrt(), -32767.5, 32766.5).sqrt();
+                [s * w, -ds * tau * w, -ds * w, w]
+            })
+            .collect();
+        let derivatives: Vec<Vec<f64>> = (0..4)
+            .map(|i| rows.iter().map(|r| r[i]).collect())
+            .collect();
+        let mut j = fisher(&derivatives, var);
+        j[2][2] += 12.0 * fs * fs;
+        let inv = invert_spd(&j).unwrap();
+        let expected = [inv[0][0], inv[1][1], inv[0][1]];
+        let got = feature_crb(&sensor, &pulse, phase).unwrap();
+        // Within the error of the bound's central differences (STEP, 0.2 samples here).
+        for (g, e) in got.iter().zip(expected) {
+            assert!((g / e - 1.0).abs() < 5e-3, "{got:?} against {expected:?}");
+        }
+        let clipped_out = rows.iter().filter(|r| r[3] < 0.01).count();
+        assert!(clipped_out >= 12, "{clipped_out}");
+        // Unclipped, at half the force (a peak of 30 000 counts): var ln F scales as 1 / F^2.
+        let unclipped = feature_crb(&sensor, &hertz_sine(0.5 * f_max, t), phase).unwrap()[0] / 4.0;
+        println!(
+            "var ln F_max: clipped {:.3e}, unclipped {unclipped:.3e} ({:.1} times)",
+            got[0],
+            got[0] / unclipped
+        );
+        assert!(got[0] > 3.0 * unclipped, "{got:?} against {unclipped}");
     }
 
     #[test]

@@ -49,8 +49,9 @@
 //! bound is reached (the Cramér-Rao bound is the variance of an efficient estimator; at low
 //! signal-to-noise ratio real estimators do worse), the pulse shape is known to the estimator
 //! (only amplitude, time scale, onset and baseline unknown; the detection's filter knows the
-//! time scale too, which a bank of filters over the scene's durations approaches), and the
-//! ADC does not clip.
+//! time scale too, which a bank of filters over the scene's durations approaches). A clipped
+//! sample counts with the information its censored reading keeps
+//! ([`crate::score::crb::censored_share`]), so a pulse that clips is bounded from its flanks.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
