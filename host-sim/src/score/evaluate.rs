@@ -1140,6 +1140,7 @@ fn by_peak_over_noise(
             error_ln: o
                 .measured
                 .map(|m| (m.ln_force - o.hertz_ln.0, m.ln_duration - o.hertz_ln.1)),
+            z: o.z,
         }),
     )
 }

@@ -6,7 +6,9 @@
 //! Per bin: the impacts, the share the kernel detected (any report paired with the impact),
 //! its `Class` verdicts and the share of those that are wrong, and the mean error of its
 //! measured `(ln F_max, ln t_c)` against the closed-form Hertz features of the drawn size and
-//! speed. A pulse a few noise RMS above the detector's trigger (`trigger_sigmas`, 6 by
+//! speed, and the root mean square of its error in its true class's `(ln R, ln u)` over the
+//! sigmas the classifier weighed it on (`z`, [`crate::score::noise_check`]: 1 where the stated
+//! noise holds). A pulse a few noise RMS above the detector's trigger (`trigger_sigmas`, 6 by
 //! default) is found only when the noise lifts it, so its measured peak is biased up; the
 //! table shows at what peak over noise the features, and the confident verdicts, hold.
 
@@ -26,6 +28,8 @@ pub struct PeakRow {
     pub confident: Option<bool>,
     /// Measured minus closed-form Hertz `(ln F_max, ln t_c)`, when the kernel measured it.
     pub error_ln: Option<(f64, f64)>,
+    /// The measurement's `(z_x, z_y)` in its true class's `(ln R, ln u)`, when located.
+    pub z: Option<(f64, f64)>,
 }
 
 /// One bin of [`PeakSnrTable`].
@@ -47,6 +51,10 @@ pub struct PeakSnrBin {
     pub bias_ln_force: f64,
     /// Mean measured minus Hertz `ln t_c` over the measured pulses (0 without any).
     pub bias_ln_duration: f64,
+    /// Root mean square of `z` in `ln R` over the located pulses (0 without any).
+    pub rms_z_ln_radius: f64,
+    /// Root mean square of `z` in `ln u` over the located pulses (0 without any).
+    pub rms_z_ln_speed: f64,
 }
 
 /// The table of [`PeakSnrBin`]s (see the module docs).
@@ -58,6 +66,50 @@ pub struct PeakSnrTable {
     pub bins: Vec<PeakSnrBin>,
 }
 
+/// What one bin of [`PeakSnrTable::of`] sums over its impacts.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
+    detected: u64,
+    wrong: u64,
+    measured: u64,
+    error_ln: (f64, f64),
+    located: u64,
+    z2: (f64, f64),
+}
+
+impl Sums {
+    /// Adds impact `r` (its `Class` verdicts counted into `confident`).
+    fn add(&mut self, r: PeakRow, confident: &mut u64) {
+        self.detected += u64::from(r.detected);
+        if let Some(right) = r.confident {
+            *confident += 1;
+            self.wrong += u64::from(!right);
+        }
+        if let Some((f, t)) = r.error_ln.filter(|(f, t)| f.is_finite() && t.is_finite()) {
+            self.measured += 1;
+            self.error_ln = (self.error_ln.0 + f, self.error_ln.1 + t);
+        }
+        if let Some((x, y)) = r.z.filter(|(x, y)| x.is_finite() && y.is_finite()) {
+            self.located += 1;
+            self.z2 = (self.z2.0 + x * x, self.z2.1 + y * y);
+        }
+    }
+
+    /// `bin` with its shares, means and root mean squares from these sums.
+    fn bin(self, bin: PeakSnrBin) -> PeakSnrBin {
+        let ratio = |a: f64, b: u64| if b == 0 { 0.0 } else { a / b as f64 };
+        PeakSnrBin {
+            detected_share: ratio(self.detected as f64, bin.impacts),
+            confident_wrong_share: ratio(self.wrong as f64, bin.confident),
+            bias_ln_force: ratio(self.error_ln.0, self.measured),
+            bias_ln_duration: ratio(self.error_ln.1, self.measured),
+            rms_z_ln_radius: ratio(self.z2.0, self.located).sqrt(),
+            rms_z_ln_speed: ratio(self.z2.1, self.located).sqrt(),
+            ..bin
+        }
+    }
+}
+
 impl PeakSnrTable {
     /// The table over `rows`, for a force noise of `noise_force_n` N.
     ///
@@ -65,6 +117,7 @@ impl PeakSnrTable {
     /// use host_sim::score::peak_snr::{PeakRow, PeakSnrTable};
     /// let row = |snr, confident, e| PeakRow {
     ///     peak_over_noise: snr, detected: true, confident, error_ln: Some((e, -e)),
+    ///     z: Some((3.0 * e, 4.0 * e)),
     /// };
     /// let t = PeakSnrTable::of(10.0, [row(7.0, Some(false), 0.2), row(7.5, None, 0.0),
     ///                                 row(30.0, Some(true), 0.01)]);
@@ -73,17 +126,20 @@ impl PeakSnrTable {
     /// assert_eq!((t.bins[0].impacts, t.bins[0].confident), (2, 1));
     /// assert_eq!(t.bins[0].confident_wrong_share, 1.0);
     /// assert!((t.bins[0].bias_ln_force - 0.1).abs() < 1e-12);
+    /// // z in ln R: 0.6 and 0, root mean square 0.6 / sqrt(2).
+    /// assert!((t.bins[0].rms_z_ln_radius - 0.6 / 2f64.sqrt()).abs() < 1e-12);
+    /// assert!((t.bins[0].rms_z_ln_speed - 0.8 / 2f64.sqrt()).abs() < 1e-12);
     /// assert_eq!(t.bins[1].to, Some(48.0));
     /// ```
     pub fn of(noise_force_n: f64, rows: impl IntoIterator<Item = PeakRow>) -> Self {
-        let mut bins: Vec<(PeakSnrBin, u64, u64, u64, f64, f64)> = (0..EDGES.len())
+        let mut bins: Vec<(PeakSnrBin, Sums)> = (0..EDGES.len())
             .map(|i| {
                 let bin = PeakSnrBin {
                     from: EDGES[i],
                     to: EDGES.get(i + 1).copied(),
                     ..PeakSnrBin::default()
                 };
-                (bin, 0, 0, 0, 0.0, 0.0)
+                (bin, Sums::default())
             })
             .collect();
         for r in rows {
@@ -91,32 +147,14 @@ impl PeakSnrTable {
                 continue;
             }
             let i = EDGES.partition_point(|&e| e <= r.peak_over_noise).max(1) - 1;
-            let (bin, detected, wrong, measured, sum_f, sum_t) = &mut bins[i];
+            let (bin, sums) = &mut bins[i];
             bin.impacts += 1;
-            *detected += u64::from(r.detected);
-            if let Some(right) = r.confident {
-                bin.confident += 1;
-                *wrong += u64::from(!right);
-            }
-            if let Some((f, t)) = r.error_ln.filter(|(f, t)| f.is_finite() && t.is_finite()) {
-                *measured += 1;
-                *sum_f += f;
-                *sum_t += t;
-            }
+            sums.add(r, &mut bin.confident);
         }
-        let ratio = |a: f64, b: u64| if b == 0 { 0.0 } else { a / b as f64 };
         let bins = bins
             .into_iter()
-            .filter(|(bin, ..)| bin.impacts > 0)
-            .map(
-                |(bin, detected, wrong, measured, sum_f, sum_t)| PeakSnrBin {
-                    detected_share: ratio(detected as f64, bin.impacts),
-                    confident_wrong_share: ratio(wrong as f64, bin.confident),
-                    bias_ln_force: ratio(sum_f, measured),
-                    bias_ln_duration: ratio(sum_t, measured),
-                    ..bin
-                },
-            )
+            .filter(|(bin, _)| bin.impacts > 0)
+            .map(|(bin, sums)| sums.bin(bin))
             .collect();
         Self {
             noise_force_n,
@@ -133,14 +171,15 @@ impl PeakSnrTable {
         );
         let _ = writeln!(
             s,
-            "  {:<14}{:>9}{:>10}{:>11}{:>9}{:>11}{:>13}",
+            "  {:<14}{:>9}{:>10}{:>11}{:>9}{:>11}{:>13}{:>20}",
             "F_max / noise",
             "impacts",
             "detected",
             "confident",
             "wrong",
             "bias ln F",
-            "bias ln t_c"
+            "bias ln t_c",
+            "rms z ln R / ln u"
         );
         for b in &self.bins {
             let range = match b.to {
@@ -149,13 +188,15 @@ impl PeakSnrTable {
             };
             let _ = writeln!(
                 s,
-                "  {range:<14}{:>9}{:>9.2}%{:>11}{:>8.2}%{:>+11.4}{:>+13.4}",
+                "  {range:<14}{:>9}{:>9.2}%{:>11}{:>8.2}%{:>+11.4}{:>+13.4}{:>13.2} / {:.2}",
                 b.impacts,
                 100.0 * b.detected_share,
                 b.confident,
                 100.0 * b.confident_wrong_share,
                 b.bias_ln_force,
-                b.bias_ln_duration
+                b.bias_ln_duration,
+                b.rms_z_ln_radius,
+                b.rms_z_ln_speed
             );
         }
         s
