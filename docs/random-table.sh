@@ -106,9 +106,10 @@ cut -f1 "$work/list.tsv" | xargs -P "$jobs" -I{} sh -c \
 python3 - "$work" "$n" "$seed" "$count" "$scene_seed" > docs/random.md <<'EOF'
 import json, os, re, sys
 sys.path.insert(0, "docs")
-from targets import check, names, print_misses, print_refused, refusal  # noqa: E402
+from targets import beats_reference, check, names, print_beaten, print_misses, print_refused, refusal  # noqa: E402
 work, n, seed, count, scene_seed = sys.argv[1:6]
 rows, misses, causes, refused, failed = [], {"forced choice": [], "confident errors": [], "calibration": []}, {}, [], []
+beaten = []
 for line in open(os.path.join(work, "list.tsv")):
     name, law_e, k, radii, rate, noise, chain = line.rstrip("\n").split("\t")
     err = open(os.path.join(work, name + ".err")).read()
@@ -130,6 +131,8 @@ for line in open(os.path.join(work, "list.tsv")):
     impacts = sum(b["impacts"] for b in bins)
     faint = sum(b["impacts"] for b in bins if b["to"] is not None and b["to"] <= 10.0) / max(impacts, 1)
     fails, gap, se, worst_bin = check(d)
+    if beats_reference(d):
+        beaten.append(name)
     rel = d["reliability"]
     saturated = d["rejected_by_reason"].get("saturated", 0) / max(impacts, 1)
     cause = [c for c, hit in (("saturated", saturated > 0.01), ("faint", faint > 0.05)) if hit]
@@ -159,6 +162,7 @@ print("1 % of the impacts rejected so) and *faint* (more than 5 % of the impacts
 print("times the force noise the detector sees).\n")
 print("## Misses\n")
 print_misses(misses, total)
+print_beaten(beaten, total)
 print("- scenes that miss a target, by cause: %s" % (", ".join("%s %d" % kv for kv in sorted(causes.items())) or "none"))
 print_refused(refused)
 print("Failed to evaluate: %d%s" % (len(failed), names(failed)))

@@ -9,6 +9,7 @@ path). A row misses a target when:
   confident errors  more than 1 % of its Class verdicts are wrong;
   calibration       a reliability bin of at least `min_verdicts` verdicts has
                     |stated - observed| above 2 pp beyond two of the bin's standard errors.
+A row above the limit by more than three standard errors is listed apart (`beats_reference`).
 """
 
 
@@ -29,6 +30,20 @@ def check(d):
     if worst_bin > 0.02:
         fails.append("calibration")
     return fails, gap, se, worst_bin
+
+
+def beats_reference(d):
+    """Whether the kernel stands above the reference limit by more than three standard errors
+    of the difference: no miss of the kernel's, but a sign that the limit is no limit."""
+    k = d["kernel_vs_reference"]
+    return k["difference"] - 3 * k["std_error"] > 0
+
+
+def print_beaten(beaten, total):
+    """The line of the scenes where the kernel beats the reference limit (see
+    `beats_reference`)."""
+    print("- above the reference limit beyond three standard errors (the limit in doubt, not a"
+          " miss): %d of %d%s" % (len(beaten), total, names(beaten)))
 
 
 def worst_bin(d):

@@ -16,7 +16,9 @@
 //! - the oracle (noise-free) is at least the Bayes limit with noise, less 3 standard errors;
 //! - a confident-error rate out of (0, 0.5) is refused, and a looser one decides more;
 //! - every impact lands in exactly one cell of its row; one seed gives one result;
-//! - every scene shipped in `scenes/` loads, converts and evaluates.
+//! - every scene shipped in `scenes/` loads, converts and evaluates;
+//! - the kernel does not beat the reference beyond 3 standard errors where a steep onset is
+//!   seen by two or three samples.
 
 use coalshock::math::{DefaultBackend, Libm};
 use host_sim::evaluate::{EvalError, EvalOptions, Evaluation, evaluate};
@@ -504,4 +506,30 @@ fn pulses_found_only_by_the_noise_get_no_confident_verdict() {
         "{found} against {}",
         1.0 - e.missed_share
     );
+}
+
+#[test]
+fn a_steep_onset_at_its_lowest_rate_does_not_beat_the_reference() {
+    // Tsuji's force rises as t^(1/4) at contact: at 22.2 kS/s (2.5-3 samples in the shortest
+    // pulses) two samples may see a pulse, which leaves its Fisher matrix singular unless the
+    // bound credits the onset the bracket its first sample sets. Without that the kernel stood
+    // 3.56 pp above the "limit" on this scene (docs/grid.md, 2000 impacts per class); a limit
+    // the kernel beats beyond 3 standard errors is no limit. The kernel also stays within
+    // 1 pp plus 3 standard errors below it.
+    let mut scene = SceneFile::paper();
+    scene.contact = host_sim::law_spec::LawSpec::Tsuji { restitution: 0.3 };
+    scene.sensor.sample_rate_hz = 22_200.0;
+    let o = EvalOptions {
+        reference: ReferenceOptions {
+            draws_per_class: 10_000,
+            ..ReferenceOptions::default()
+        },
+        ..options(1000, 3)
+    };
+    let e = evaluate::<Libm>(&scene, &o).expect("evaluates");
+    let (d, limit) = (e.kernel_vs_reference, e.reference.accuracy);
+    println!("kernel - reference ({limit:.4}): {d:?}");
+    assert!(d.difference <= 3.0 * d.std_error, "{d:?} {:?}", e.reference);
+    assert!(d.difference >= -0.01 - 3.0 * d.std_error, "{d:?}");
+    check_accounting(&e);
 }
