@@ -370,7 +370,7 @@ fn descend_flanks(
     keep: &impl Fn([f32; 3], f32) -> [f32; 3],
 ) -> Option<[f32; 3]> {
     let residual = |q| fit.residual(q);
-    descend(fit.read(), p, fit.g(), residual, keep).map(|(p, _)| p)
+    descend(fit.read(), p, fit.g(), residual, keep).map(|(p, ..)| p)
 }
 
 /// The fit at `p = [F_peak, k_peak, r]` when it describes a clipped pulse of the table's

@@ -313,8 +313,8 @@ pub(crate) const HALVINGS: usize = 6;
 /// the residual sum of squares at `p`, each halved until it lowers that residual (the steep
 /// flank of a damped pulse can throw a full step off the pulse) and kept in range by
 /// `keep(step, floor)` (`floor`: half the current `F_max`); none that does: converged. The
-/// point reached and its residual; `None` for singular normal equations, or a residual not
-/// taken at `p`.
+/// point reached, its residual and the extra rows `residual` built there; `None` for
+/// singular normal equations, or a residual not taken at `p`.
 #[cfg(feature = "pulse_shape")]
 pub(crate) fn descend<const R: usize>(
     (ks, ys): (&[f32], &[f32]),
@@ -322,7 +322,7 @@ pub(crate) fn descend<const R: usize>(
     shape: impl Fn(f32) -> (f32, f32),
     residual: impl Fn([f32; 3]) -> Option<(f32, [[f32; 4]; R])>,
     keep: impl Fn([f32; 3], f32) -> [f32; 3],
-) -> Option<([f32; 3], f32)> {
+) -> Option<([f32; 3], f32, [[f32; 4]; R])> {
     let (mut best, mut rows) = residual(p)?;
     for _ in 0..STEPS {
         let (next, _, _) = gauss_newton_of(ks, ys, p, &shape, &rows)?;
@@ -346,7 +346,7 @@ pub(crate) fn descend<const R: usize>(
             break;
         }
     }
-    Some((p, best))
+    Some((p, best, rows))
 }
 
 /// The Gauss-Newton normal equations of `F_max g(d (k - k_peak))` (the template `shape(x) =

@@ -93,11 +93,11 @@ pub fn short_shape_fit(
     // The descent from the best start of each band of durations: the contact's end may
     // cross a sample, whose kink can hold a descent short of the least residual.
     let found = fit.scan(r0).map(|start| fit.descend(start?, r0));
-    let best = found
+    let (p, rss, rows) = found
         .into_iter()
         .flatten()
         .reduce(|a, b| if b.1 < a.1 { b } else { a })?;
-    fit.accepted(best.0, best.1, r0)
+    fit.accepted(p, rss, &rows, r0)
 }
 
 /// What [`short_shape_fit`] fits.
@@ -150,8 +150,8 @@ impl Short<'_> {
 
     /// The descent ([`descend`]) from `start` over the five weighted rows ([`Self::rows`]),
     /// kept within `r0 / R_SPAN..R_SPAN r0` and [`AT_SPAN`] samples of the largest, `F_peak`
-    /// above half its value: the point reached and its residual.
-    fn descend(&self, start: [f32; 3], r0: f32) -> Option<([f32; 3], f32)> {
+    /// above half its value: the point reached, its residual and its rows.
+    fn descend(&self, start: [f32; 3], r0: f32) -> Option<([f32; 3], f32, [[f32; 4]; 5])> {
         let keep = |[peak, at, r]: [f32; 3], floor: f32| {
             [
                 peak.max(floor),
@@ -186,8 +186,9 @@ impl Short<'_> {
         best.map(|b| b.map(|(p, _)| p))
     }
 
-    /// The fit at `p` with residual `rss` when it holds (see [`short_shape_fit`]).
-    fn accepted(&self, p: [f32; 3], rss: f32, r0: f32) -> Option<FlankFit> {
+    /// The fit at `p` with residual `rss` and weighted `rows` ([`Self::rows`]) when it holds
+    /// (see [`short_shape_fit`]).
+    fn accepted(&self, p: [f32; 3], rss: f32, rows: &[[f32; 4]; 5], r0: f32) -> Option<FlankFit> {
         let [peak, at, r] = p;
         // Not held at the bounds the descent keeps it in.
         let free =
@@ -195,7 +196,6 @@ impl Short<'_> {
         if !(free && rss <= RSS_MAX) {
             return None;
         }
-        let (_, rows) = self.rows(p);
         // The rows that see the pulse: the model's force four sigma or more.
         let mut felt = [[0.0f32; 4]; 5];
         let mut seen = 0;

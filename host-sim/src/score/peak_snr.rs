@@ -69,6 +69,8 @@ pub struct PeakSnrTable {
 /// What one bin of [`PeakSnrTable::of`] sums over its impacts.
 #[derive(Debug, Clone, Copy, Default)]
 struct Sums {
+    impacts: u64,
+    confident: u64,
     detected: u64,
     wrong: u64,
     measured: u64,
@@ -78,11 +80,12 @@ struct Sums {
 }
 
 impl Sums {
-    /// Adds impact `r` (its `Class` verdicts counted into `confident`).
-    fn add(&mut self, r: PeakRow, confident: &mut u64) {
+    /// Adds impact `r`.
+    fn add(&mut self, r: PeakRow) {
+        self.impacts += 1;
         self.detected += u64::from(r.detected);
         if let Some(right) = r.confident {
-            *confident += 1;
+            self.confident += 1;
             self.wrong += u64::from(!right);
         }
         if let Some((f, t)) = r.error_ln.filter(|(f, t)| f.is_finite() && t.is_finite()) {
@@ -95,17 +98,21 @@ impl Sums {
         }
     }
 
-    /// `bin` with its shares, means and root mean squares from these sums.
-    fn bin(self, bin: PeakSnrBin) -> PeakSnrBin {
+    /// The bin of edges `from` and `to` (`None`: open above) from these sums: its counts,
+    /// shares, means and root mean squares.
+    fn bin(self, from: f64, to: Option<f64>) -> PeakSnrBin {
         let ratio = |a: f64, b: u64| if b == 0 { 0.0 } else { a / b as f64 };
         PeakSnrBin {
-            detected_share: ratio(self.detected as f64, bin.impacts),
-            confident_wrong_share: ratio(self.wrong as f64, bin.confident),
+            from,
+            to,
+            impacts: self.impacts,
+            detected_share: ratio(self.detected as f64, self.impacts),
+            confident: self.confident,
+            confident_wrong_share: ratio(self.wrong as f64, self.confident),
             bias_ln_force: ratio(self.error_ln.0, self.measured),
             bias_ln_duration: ratio(self.error_ln.1, self.measured),
             rms_z_ln_radius: ratio(self.z2.0, self.located).sqrt(),
             rms_z_ln_speed: ratio(self.z2.1, self.located).sqrt(),
-            ..bin
         }
     }
 }
@@ -132,29 +139,19 @@ impl PeakSnrTable {
     /// assert_eq!(t.bins[1].to, Some(48.0));
     /// ```
     pub fn of(noise_force_n: f64, rows: impl IntoIterator<Item = PeakRow>) -> Self {
-        let mut bins: Vec<(PeakSnrBin, Sums)> = (0..EDGES.len())
-            .map(|i| {
-                let bin = PeakSnrBin {
-                    from: EDGES[i],
-                    to: EDGES.get(i + 1).copied(),
-                    ..PeakSnrBin::default()
-                };
-                (bin, Sums::default())
-            })
-            .collect();
+        let mut sums = [Sums::default(); EDGES.len()];
         for r in rows {
             if !r.peak_over_noise.is_finite() {
                 continue;
             }
             let i = EDGES.partition_point(|&e| e <= r.peak_over_noise).max(1) - 1;
-            let (bin, sums) = &mut bins[i];
-            bin.impacts += 1;
-            sums.add(r, &mut bin.confident);
+            sums[i].add(r);
         }
-        let bins = bins
-            .into_iter()
-            .filter(|(bin, _)| bin.impacts > 0)
-            .map(|(bin, sums)| sums.bin(bin))
+        let bins = sums
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.impacts > 0)
+            .map(|(i, s)| s.bin(EDGES[i], EDGES.get(i + 1).copied()))
             .collect();
         Self {
             noise_force_n,
