@@ -53,8 +53,8 @@
 //!   band (`1 + sum g_j`), less a slow part bounded by `sum g_j w_j^2` over the run; ringing
 //!   seen before the pulse counts at every flank sample and, with one sign, in the sum. A
 //!   pulse whose flanks are too short, whose contact's shape the scene does not carry, that
-//!   the fit does not describe, or whose re-estimation is not believed (a pulse or a sample
-//!   at full scale inside its window) stays `Saturated`.
+//!   the fit does not describe, or whose re-estimation is believed in none of its windows
+//!   (another pulse inside each, or a sample at full scale first) stays `Saturated`.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the level a sample above it must pass to

@@ -300,8 +300,12 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
 
     /// Feeds the front of `samples` to the open window of the re-estimation
     /// ([`Settler::run`]) and tells the detector and the counters what it took. Returns how
-    /// many samples it took and, when the window ended (believed, discarded, or at a sample
-    /// at full scale), the measurement of a clipped pulse that waited for it.
+    /// many samples it took and, when the re-estimation ended (a window believed, or the last
+    /// one discarded), the measurement of a clipped pulse that waited for it. A discarded
+    /// window with another to come leaves the pulse waiting: right after a clipped pulse the
+    /// state error can hide the pulse's own tail, which the detector then ended early, and
+    /// that tail in the first window leaves it unbelieved; the next window starts at the
+    /// pulse's anchor again. A sample at full scale ends the wait in the detector.
     #[cold]
     #[inline(never)]
     fn settle_slice<S: Copy + Into<i32>>(&mut self, samples: &[S]) -> (usize, Option<Detection>) {
@@ -317,7 +321,7 @@ impl<const N: usize, M: Backend, F: FlowSlot<M>> Monitor<N, M, F> {
         }
         c.settle_samples = c.settle_samples.saturating_add(taken.samples as u64);
         #[cfg(all(feature = "settle", feature = "pulse_shape"))]
-        if !self.settler.in_window() {
+        if !(self.settler.in_window() || self.settler.is_armed()) {
             return (
                 taken.samples as usize,
                 self.detector.resolve_clip(taken.clip),

@@ -39,7 +39,10 @@
 //! **A clipped pulse behind beam modes** (with the feature `pulse_shape`) waits for the window
 //! after it: `Settler::start_anchored` starts the shadows at the pulse's anchor, so that the
 //! fit's `d` is the state error there and also states the error in that pulse's own samples
-//! after the run (`crate::settle_clip`).
+//! after the run (`crate::settle_clip`). It waits through discarded windows, each anchored
+//! afresh, until one is believed or [`MAX_WINDOWS`] are spent: the first window often
+//! holds the pulse's own tail, which the state error (thousands of counts after a deep clip)
+//! pushed below the detector's release level.
 //!
 //! **Cost.** Behind a rigid chain nothing arms it. It is the cargo feature `settle` (on by
 //! default): on a Cortex-M4F 2.5 KB of flash on a size-optimised node with one math backend

@@ -414,3 +414,57 @@ fn clipped_pulses_behind_beam_modes_are_measured_within_their_sigmas() {
         assert!(wrong * 100 <= confident, "{wrong} of {confident}");
     }
 }
+
+/// A deep clip behind beam modes: a Gonthier contact (e 0.38) at 100 kS/s behind a 41 kHz
+/// accelerometer and modes at 120 and 1 500 Hz, with a full scale of 23.7 kN that nearly
+/// every impact passes (roof sandstone peaks at 2-9 times it). The state error the run
+/// leaves rings at thousands of counts, pushes the pulse's tail below the release level, and
+/// that tail then sits in the first window after the pulse, which is not believed. The
+/// pulse waits for the next window, anchored afresh: at least 90 % of the clipped impacts
+/// are measured (63 % were, when the first window's verdict was final), their `ln F` within the stated sigmas against the integrator's peak (z RMS at
+/// most 1), and a confident class is at most 1 % wrong.
+#[test]
+fn a_deep_clip_behind_beam_modes_waits_for_a_believed_window() {
+    let toml = r#"
+name = "deep_clip"
+plate = "carbon_steel"
+[[classes]]
+name = "roof_sandstone"
+material = "roof_sandstone"
+radius_m = [0.0445, 0.0641]
+drop_height_m = [0.327, 1.491]
+[[classes]]
+name = "coal"
+material = "coal"
+radius_m = [0.0445, 0.0641]
+drop_height_m = [0.327, 1.491]
+[contact]
+law = "gonthier"
+restitution = 0.38
+[sensor]
+sample_rate_hz = 100000.0
+effective_mass_kg = 24.4
+counts_per_m_s2 = 33.8
+noise_rms_counts = 10.0
+adc_bits = 16
+accelerometer = { frequency_hz = 41008.0, damping_ratio = 0.34 }
+[[sensor.beam_modes]]
+frequency_hz = 120.0
+damping_ratio = 0.014
+gain = 0.116
+[[sensor.beam_modes]]
+frequency_hz = 1500.0
+damping_ratio = 0.014
+gain = 0.069
+"#;
+    let (z, clipped, measured, confident, wrong) = clipped_behind(toml, 400, 5);
+    let rms = (z.iter().map(|v| v[0] * v[0]).sum::<f64>() / z.len() as f64).sqrt();
+    eprintln!(
+        "clipped {clipped}, measured {measured}, confident {confident}, wrong {wrong}; \
+         z of ln F: RMS {rms:.2}"
+    );
+    assert!(clipped > 300, "{clipped}");
+    assert!(measured * 10 >= clipped * 9, "{measured} of {clipped}");
+    assert!(rms <= 1.0, "{rms}");
+    assert!(wrong * 100 <= confident, "{wrong} of {confident}");
+}
