@@ -54,7 +54,9 @@
 //!   seen before the pulse counts at every flank sample and, with one sign, in the sum. A
 //!   pulse whose flanks are too short, whose contact's shape the scene does not carry, that
 //!   the fit does not describe, or whose re-estimation is believed in none of its windows
-//!   (another pulse inside each, or a sample at full scale first) stays `Saturated`.
+//!   (another pulse inside each, or a sample at full scale first) stays `Saturated`. After
+//!   the run behind beam modes no second impact is looked for (`PileUp`): the state error
+//!   under the values and the modes' ringing in the raw samples both fall and rise like one.
 //! - Drift: the oldest half of the pre-trigger samples must sit within half the trigger level
 //!   of the baseline; otherwise the baseline lagged a DC drift and the pulse is `Drift`.
 //! - A sample below the baseline moves it by at most the level a sample above it must pass to
@@ -432,12 +434,15 @@ impl Pulse {
     }
 
     /// The largest value `v` with its index and neighbours (`older`, `last` before it, two
-    /// after it), the valley since, and a second impact: a rise from a deep valley after an
-    /// earlier peak ([`second_peak`]).
+    /// after it), the valley since, and (when `second` is set) a second impact: a rise from
+    /// a deep valley after an earlier peak ([`second_peak`]).
     #[inline(always)]
-    fn track_max(&mut self, v: f32, older: f32, index: u64, noise: f32) {
+    fn track_max(&mut self, v: f32, older: f32, index: u64, noise: f32, second: bool) {
         if v > self.max {
-            if self.max > 0.0 && second_peak(self.max, self.valley, v, self.trigger, noise) {
+            if second
+                && self.max > 0.0
+                && second_peak(self.max, self.valley, v, self.trigger, noise)
+            {
                 self.pileup = true;
             }
             self.max = v;
@@ -452,7 +457,7 @@ impl Pulse {
             }
             if v < self.valley {
                 self.valley = v;
-            } else if second_peak(self.max, self.valley, v, self.trigger, noise) {
+            } else if second && second_peak(self.max, self.valley, v, self.trigger, noise) {
                 self.pileup = true;
             }
         }
@@ -1170,6 +1175,7 @@ impl<M: Backend> Detector<M> {
     #[inline(never)]
     fn active(&mut self, sample: i32, value: f32, index: u64) -> Option<Detection> {
         let v = value - self.baseline;
+        let modes = self.behind_modes();
         let p = &mut self.pulse;
         p.samples = p.samples.saturating_add(1);
         p.sum += v;
@@ -1191,7 +1197,13 @@ impl<M: Backend> Detector<M> {
         );
         p.track_top(sample);
         p.track_moments(v);
-        p.track_max(v, older, index, self.noise);
+        // Behind beam modes the values after a clipped run carry the sections' state error
+        // (thousands of counts after a deep clip) and the raw samples the modes' ringing (the
+        // modes' gain times a peak that passed full scale): either falls and rises like a
+        // second impact, so the second-peak test is not made there. The flank fit's residual
+        // (its sum takes a second impact within the pulse) remains.
+        let after_run = modes && p.clipped > 0;
+        p.track_max(v, older, index, self.noise, !after_run);
         p.last = v;
         if v <= p.release {
             p.below_release = p.below_release.saturating_add(1);

@@ -15,7 +15,7 @@ use host_sim::kernel_scene::scene_to_kernel;
 use host_sim::replay::{Matching, match_truth, replay};
 use host_sim::saturation::predict;
 use host_sim::scene::SceneFile;
-use host_sim::stream::{Stream, StreamOptions};
+use host_sim::stream::{ImpactFault, Stream, StreamOptions};
 
 /// Roof sandstone against a hard coal up to R = 0.08 m, dropped 0.3-1.2 m, at the paper's
 /// gain (30 counts per m/s^2 on 50 kg, 16 bits: full scale 54.6 kN).
@@ -415,18 +415,14 @@ fn clipped_pulses_behind_beam_modes_are_measured_within_their_sigmas() {
     }
 }
 
-/// A deep clip behind beam modes: a Gonthier contact (e 0.38) at 100 kS/s behind a 41 kHz
-/// accelerometer and modes at 120 and 1 500 Hz, with a full scale of 23.7 kN that nearly
-/// every impact passes (roof sandstone peaks at 2-9 times it). The state error the run
-/// leaves rings at thousands of counts, pushes the pulse's tail below the release level, and
-/// that tail then sits in the first window after the pulse, which is not believed. The
-/// pulse waits for the next window, anchored afresh: at least 90 % of the clipped impacts
-/// are measured (63 % were, when the first window's verdict was final), their `ln F` within the stated sigmas against the integrator's peak (z RMS at
-/// most 1), and a confident class is at most 1 % wrong.
-#[test]
-fn a_deep_clip_behind_beam_modes_waits_for_a_believed_window() {
-    let toml = r#"
-name = "deep_clip"
+/// Two deep clips behind beam modes, where nearly every impact passes full scale (the harder
+/// class peaks at 2-9 times it). `GONTHIER`: e 0.38 at 100 kS/s behind a 41 kHz accelerometer
+/// and modes at 120 and 1 500 Hz. `LANKARANI`: e 0.75 at 26.7 kS/s behind modes at 650 and
+/// 2 100 Hz, 44-163 mm lumps of two rocks of 12 and 6.4 GPa, 25-34 samples at full
+/// scale.
+const DEEP_CLIPS: [&str; 2] = [
+    r#"
+name = "deep_clip_gonthier"
 plate = "carbon_steel"
 [[classes]]
 name = "roof_sandstone"
@@ -456,15 +452,95 @@ gain = 0.116
 frequency_hz = 1500.0
 damping_ratio = 0.014
 gain = 0.069
-"#;
-    let (z, clipped, measured, confident, wrong) = clipped_behind(toml, 400, 5);
-    let rms = (z.iter().map(|v| v[0] * v[0]).sum::<f64>() / z.len() as f64).sqrt();
-    eprintln!(
-        "clipped {clipped}, measured {measured}, confident {confident}, wrong {wrong}; \
-         z of ln F: RMS {rms:.2}"
-    );
-    assert!(clipped > 300, "{clipped}");
-    assert!(measured * 10 >= clipped * 9, "{measured} of {clipped}");
-    assert!(rms <= 1.0, "{rms}");
-    assert!(wrong * 100 <= confident, "{wrong} of {confident}");
+"#,
+    r#"
+name = "deep_clip_lankarani"
+plate = "carbon_steel"
+[[classes]]
+name = "dense"
+material = { density_kg_m3 = 2725, modulus_pa = 1.207e10, poisson = 0.10 }
+radius_m = [0.0436, 0.1629]
+speed_m_s = [2.72, 4.36]
+[[classes]]
+name = "light"
+material = { density_kg_m3 = 1432, modulus_pa = 6.446e9, poisson = 0.27 }
+radius_m = [0.0436, 0.1629]
+speed_m_s = [2.72, 4.36]
+[contact]
+law = "lankarani_nikravesh"
+restitution = 0.75
+[sensor]
+sample_rate_hz = 26667.0
+effective_mass_kg = 25.5
+counts_per_m_s2 = 28.8
+noise_rms_counts = 10.0
+adc_bits = 16
+[[sensor.beam_modes]]
+frequency_hz = 650.0
+damping_ratio = 0.026
+gain = 0.027
+[[sensor.beam_modes]]
+frequency_hz = 2100.0
+damping_ratio = 0.021
+gain = 0.025
+"#,
+];
+
+/// After a deep clip behind beam modes the state error the run leaves rings at thousands of
+/// counts under the rest of the pulse. It pushes the pulse's tail below the release level, so
+/// the tail sits in the first window after the pulse, which is not believed: the pulse waits
+/// for the next window, anchored afresh. And it falls and rises like a second impact (so do
+/// the raw samples, by the modes' ringing), so the second-peak test is not made after the
+/// run. On both `DEEP_CLIPS` at least 97 % of the clipped impacts are measured (63 % of the
+/// first scene's were while the first window's verdict was final; 93 % of the second's with
+/// the test made after the run), their `ln F`
+/// within the stated sigmas against the integrator's peak (z RMS at most 1), and a
+/// confident class is at most 1 % wrong.
+#[test]
+fn deep_clips_behind_beam_modes_are_measured() {
+    for toml in DEEP_CLIPS {
+        let (z, clipped, measured, confident, wrong) = clipped_behind(toml, 400, 5);
+        let rms = (z.iter().map(|v| v[0] * v[0]).sum::<f64>() / z.len() as f64).sqrt();
+        eprintln!(
+            "clipped {clipped}, measured {measured}, confident {confident}, wrong {wrong}; \
+             z of ln F: RMS {rms:.2}"
+        );
+        assert!(clipped > 300, "{clipped}");
+        assert!(measured * 100 >= clipped * 97, "{measured} of {clipped}");
+        assert!(rms <= 1.0, "{rms}");
+        assert!(wrong * 100 <= confident, "{wrong} of {confident}");
+    }
+}
+
+/// Without the second-peak test after a deep clip behind modes, what a second impact within
+/// the pulse leaves is the flank fit's to catch (its sum takes the second impact), and one
+/// after it the window's. With half the impacts piled up 0.5-0.95 contact times apart, at
+/// most 2 % of the piled-up impacts get a wrong confident class (1 of 113 on the Gonthier
+/// scene and none on the other, with the test made after the run and without it alike).
+#[test]
+fn deep_clips_piled_up_behind_beam_modes_are_not_confidently_wrong() {
+    let opts = StreamOptions {
+        pileup_share: 0.5,
+        ..StreamOptions::default()
+    };
+    for toml in DEEP_CLIPS {
+        let scene = SceneFile::from_toml_str(toml).expect("scene");
+        let stream = generate(&scene, 400, 6, &opts).expect("stream");
+        let (reports, m) = replayed(&scene, &stream);
+        let (mut piled, mut confident, mut wrong) = (0, 0, 0);
+        for pair in &m.pairs {
+            let t = &stream.truth[pair.truth];
+            if t.fault != ImpactFault::PileUp {
+                continue;
+            }
+            piled += 1;
+            if let Verdict::Class { class, .. } = reports[pair.report].verdict {
+                confident += 1;
+                wrong += usize::from(class as usize != t.class);
+            }
+        }
+        eprintln!("piled up {piled}, confident {confident}, wrong {wrong}");
+        assert!(piled > 100, "{piled}");
+        assert!(wrong * 50 <= piled, "{wrong} of {piled}");
+    }
 }
