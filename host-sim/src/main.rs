@@ -25,6 +25,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use host_sim::generate::generate_with_progress;
 use host_sim::law_spec::LawSpec;
+use host_sim::report::write_stdout;
 use host_sim::scene::{self, SceneFile};
 use host_sim::stream::{FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamOptions};
 use host_sim::stream_file::write_stream;
@@ -161,8 +162,7 @@ fn run_identify(args: &IdentifyArgs) -> Result<()> {
         .collect();
     let id = host_sim::identify::identify(&samples, &args.options()?)
         .with_context(|| format!("identifying the chain from {}", args.stream.display()))?;
-    print!("{}", id.to_toml());
-    Ok(())
+    write_stdout(&id.to_toml())
 }
 
 /// How each impact's force pulse is made.
@@ -308,27 +308,26 @@ fn run_stream(args: &StreamArgs) -> Result<()> {
     bar.finish_and_clear();
     let stream = stream.with_context(|| format!("generating a stream of {from}"))?;
     let (bin, csv) = write_stream(&stream, &args.out)?;
-    print_summary(&stream, &from, args.seed, &bin, &csv);
-    Ok(())
+    print_summary(&stream, &from, args.seed, &bin, &csv)
 }
 
-fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) {
+fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) -> Result<()> {
     let count = |f: ImpactFault| s.truth.iter().filter(|t| t.fault == f).count();
     let events = |k: FaultKind| s.events.iter().filter(|e| e.kind == k).count();
-    println!(
-        "{} impacts of {scene} (seed {seed}) in {} samples at {} Hz ({:.3} s)",
+    write_stdout(&format!(
+        "{} impacts of {scene} (seed {seed}) in {} samples at {} Hz ({:.3} s)\n",
         s.truth.len(),
         s.timeline_samples,
         s.sample_rate_hz,
         s.timeline_samples as f64 / s.sample_rate_hz
-    );
+    ))?;
     for (i, name) in s.class_names.iter().enumerate() {
         let n = s.truth.iter().filter(|t| t.class == i).count();
-        println!("  {name}: {n}");
+        write_stdout(&format!("  {name}: {n}\n"))?;
     }
-    println!(
+    write_stdout(&format!(
         "faults: {} pile-up impacts, {} saturated, {} gaps in pulses, {} truncated, {} gaps \
-         ({} samples lost), {} spikes, {} stuck runs",
+         ({} samples lost), {} spikes, {} stuck runs\n",
         count(ImpactFault::PileUp),
         count(ImpactFault::Saturated),
         count(ImpactFault::Gap),
@@ -337,21 +336,42 @@ fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) {
         s.gaps.iter().map(|g| g.lost as u64).sum::<u64>(),
         events(FaultKind::Spike),
         events(FaultKind::Stuck)
-    );
-    println!("wrote {} and {}", bin.display(), csv.display());
+    ))?;
+    write_stdout(&format!("wrote {} and {}\n", bin.display(), csv.display()))
 }
 
 /// Runs the command; an error is the user's to read, its causes after it, without a stack
 /// backtrace whatever `RUST_BACKTRACE` says (exit code 1; clap's own refusals exit with 2).
+/// An error whose chain holds a broken pipe (the reader closed standard output early, as
+/// `| head` does) ends the command quietly with exit code 141, what a shell reports for a
+/// process that SIGPIPE ended: no one is left to read a message, and a script under
+/// `set -o pipefail` still sees that the command stopped (one that writes files after its
+/// report has not written them).
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     match run(&cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) if is_broken_pipe(&e) => std::process::ExitCode::from(BROKEN_PIPE_EXIT),
         Err(e) => {
             eprintln!("Error: {e:#}");
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// Exit code of a command whose reader closed standard output: 128 + SIGPIPE (13).
+const BROKEN_PIPE_EXIT: u8 = 141;
+
+/// Whether `e`'s chain holds an I/O error of kind `BrokenPipe`, on its own or inside a CSV
+/// writer's error (`impact` writes its rows through one, whose error hides its I/O cause).
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    let broken = |io: &std::io::Error| io.kind() == std::io::ErrorKind::BrokenPipe;
+    e.chain().any(|cause| {
+        cause.downcast_ref::<std::io::Error>().is_some_and(broken)
+            || cause
+                .downcast_ref::<csv::Error>()
+                .is_some_and(|c| matches!(c.kind(), csv::ErrorKind::Io(io) if broken(io)))
+    })
 }
 
 fn run(cli: &Cli) -> Result<()> {
@@ -397,11 +417,10 @@ fn run_evaluate(args: &host_sim::evaluate_cli::EvaluateArgs) -> Result<()> {
     bar.finish_and_clear();
     let eval = eval.with_context(|| format!("evaluating {}", args.scene.display()))?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&eval)?);
+        write_stdout(&format!("{}\n", serde_json::to_string_pretty(&eval)?))
     } else {
-        print!("{}", eval.table());
+        write_stdout(&eval.table())
     }
-    Ok(())
 }
 
 #[cfg(test)]

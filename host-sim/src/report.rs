@@ -10,3 +10,15 @@ pub mod paper;
 pub mod plasticity;
 pub mod speed;
 pub mod tradeoff;
+
+/// Writes `text` to standard output and flushes it, the error naming it; a reader that closed
+/// the pipe gives an [`std::io::ErrorKind::BrokenPipe`] in the chain, which the binary takes
+/// for the end of the command.
+pub fn write_stdout(text: &str) -> anyhow::Result<()> {
+    use anyhow::Context;
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .context("writing to standard output")
+}

@@ -2,9 +2,11 @@
 //! scene) the class's: counts beyond their bound, ranges that are not two numbers, values the
 //! kernel's f32 cannot hold, an unknown material, and a stream whose samples do not match its
 //! truth file. Each case runs the `host-sim` binary or the file reader on the bad input.
+//! A reader that closes standard output early ends the command quietly with exit code 141
+//! (128 + SIGPIPE), without a panic.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Stdio};
 
 use host_sim::generate::generate;
 use host_sim::hertz64::Material64;
@@ -326,4 +328,28 @@ fn an_accelerometer_tolerance_needs_an_accelerometer_and_a_relative_error() {
         &too_wide,
         &["sensor.accelerometer_tolerance.damping", "[0, 0.5)", "0.7"],
     );
+}
+
+/// `evaluate` whose standard output is a pipe closed by its reader before anything is written
+/// (as `host-sim evaluate ... | head -0` does) ends quietly with exit code 141, what a shell
+/// reports for a process SIGPIPE ended, without a panic on the broken pipe (which aborted
+/// it before).
+#[test]
+fn a_reader_that_closes_standard_output_early_ends_the_command_quietly() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/paper.toml");
+    let scene = scene.to_str().expect("utf8 path");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_host-sim"))
+        .args(["evaluate", "--scene", scene, "--n", "50", "--seed", "1"])
+        .env("RUST_BACKTRACE", "0")
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("runs host-sim");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("waits for host-sim");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(out.status.code(), Some(141), "{err}");
+    assert!(!err.contains("Error"), "{err}");
 }

@@ -111,11 +111,10 @@ pub fn run_cli(args: &CavingArgs) -> Result<()> {
         write_plots(&report, dir)?;
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        crate::report::write_stdout(&format!("{}\n", serde_json::to_string_pretty(&report)?))
     } else {
-        print!("{}", table(&report));
+        crate::report::write_stdout(&table(&report))
     }
-    Ok(())
 }
 
 /// The summary as text.

@@ -50,7 +50,7 @@ pub fn run(scene_path: &Path, out: Option<&Path>) -> Result<()> {
             }
             std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?
         }
-        None => print!("{text}"),
+        None => crate::report::write_stdout(&text)?,
     }
     Ok(())
 }

@@ -1160,21 +1160,21 @@ pub fn write_svgs(res: &PaperResults, dir: &Path) -> anyhow::Result<Vec<PathBuf>
 /// SVG files into `out` (created if missing), listing them at the end.
 pub fn run(cfg: &PaperConfig, out: &Path) -> anyhow::Result<()> {
     let res = compute(cfg)?;
-    print!("{}", render_report(&res));
+    crate::report::write_stdout(&render_report(&res))?;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut files = write_csvs(&res, out)?;
     files.extend(write_svgs(&res, out)?);
-    print_written(&files);
-    Ok(())
+    print_written(&files)
 }
 
 /// Lists the files a command wrote, after a blank line.
-pub(crate) fn print_written(files: &[std::path::PathBuf]) {
-    println!();
-    println!("Wrote:");
+pub(crate) fn print_written(files: &[std::path::PathBuf]) -> anyhow::Result<()> {
+    crate::report::write_stdout("\n")?;
+    crate::report::write_stdout("Wrote:\n")?;
     for f in files {
-        println!("  {}", f.display());
+        crate::report::write_stdout(&format!("  {}\n", f.display()))?;
     }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@ use crate::physics::integrate::Tolerance;
 use crate::physics::law_spec::LawSpec;
 use crate::physics::thornton::ThorntonImpact64;
 use crate::report::paper::{Curve, Stroke, draw_svg, print_written};
+use crate::report::write_stdout;
 use crate::scene::{self, SceneFile};
 use crate::score::yield_bayes::{YieldClass, yield_bayes_accuracy, yield_classes};
 
@@ -285,16 +286,15 @@ fn print_bayes(scene: &SceneFile, draws: usize, seed: u64) -> anyhow::Result<()>
         .collect();
     let y = yield_bayes_accuracy(&yielding, draws, seed)?;
     let e = yield_bayes_accuracy(&elastic, draws, seed)?;
-    println!(
+    write_stdout(&format!(
         "noiseless Bayes limit (exact F_max, t_c), {} draws: yielding {:.2} % +- {:.2} %, \
-         elastic {:.2} % +- {:.2} %",
+         elastic {:.2} % +- {:.2} %\n",
         y.n,
         100.0 * y.accuracy,
         100.0 * y.std_error,
         100.0 * e.accuracy,
         100.0 * e.std_error
-    );
-    Ok(())
+    ))
 }
 
 /// `host-sim plasticity`: the sweep of every yielding class, printed as a table and written
@@ -302,15 +302,17 @@ fn print_bayes(scene: &SceneFile, draws: usize, seed: u64) -> anyhow::Result<()>
 pub fn run(args: &PlasticityOptions) -> anyhow::Result<()> {
     let scene = scene::load(&args.scene)?;
     let rows = sweep(&scene, args.radius_m, args.points)?;
-    println!("class  R (m)  u (m/s)  F_Hertz (N)  F_yield (N)  t_Hertz (us)  t_yield (us)  e");
+    write_stdout(
+        "class  R (m)  u (m/s)  F_Hertz (N)  F_yield (N)  t_Hertz (us)  t_yield (us)  e\n",
+    )?;
     let every = ((args.points - 1) / 4).max(1);
     for (_, r) in rows
         .iter()
         .enumerate()
         .filter(|(i, _)| (i % args.points).is_multiple_of(every))
     {
-        println!(
-            "{}  {:.4}  {:.2}  {:.0}  {:.0}  {:.1}  {:.1}  {:.3}",
+        write_stdout(&format!(
+            "{}  {:.4}  {:.2}  {:.0}  {:.0}  {:.1}  {:.1}  {:.3}\n",
             r.class,
             r.radius_m,
             r.speed_m_s,
@@ -319,7 +321,7 @@ pub fn run(args: &PlasticityOptions) -> anyhow::Result<()> {
             r.elastic_duration_s * 1e6,
             r.yield_duration_s * 1e6,
             r.yield_restitution
-        );
+        ))?;
     }
     if args.bayes_draws > 0 {
         print_bayes(&scene, args.bayes_draws, args.seed)?;
@@ -330,6 +332,5 @@ pub fn run(args: &PlasticityOptions) -> anyhow::Result<()> {
     write_csv(&rows, &csv_path)?;
     let mut files = vec![csv_path];
     files.extend(write_svgs(&rows, &args.out)?);
-    print_written(&files);
-    Ok(())
+    print_written(&files)
 }

@@ -343,9 +343,8 @@ fn ratios(r: &SpeedReport) -> String {
 pub fn run(args: &SpeedOptions) -> Result<()> {
     let r = measure(args)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+        crate::report::write_stdout(&format!("{}\n", serde_json::to_string_pretty(&r)?))
     } else {
-        print!("{}", render(&r));
+        crate::report::write_stdout(&render(&r))
     }
-    Ok(())
 }
