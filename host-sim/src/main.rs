@@ -25,7 +25,7 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use host_sim::generate::generate_with_progress;
 use host_sim::law_spec::LawSpec;
-use host_sim::report::write_stdout;
+use host_sim::report::{write_json, write_stdout};
 use host_sim::scene::{self, SceneFile};
 use host_sim::stream::{FaultKind, FaultOptions, ImpactFault, PulseModel, Stream, StreamOptions};
 use host_sim::stream_file::write_stream;
@@ -417,7 +417,7 @@ fn run_evaluate(args: &host_sim::evaluate_cli::EvaluateArgs) -> Result<()> {
     bar.finish_and_clear();
     let eval = eval.with_context(|| format!("evaluating {}", args.scene.display()))?;
     if args.json {
-        write_stdout(&format!("{}\n", serde_json::to_string_pretty(&eval)?))
+        write_json(&eval)
     } else {
         write_stdout(&eval.table())
     }

@@ -22,3 +22,8 @@ pub fn write_stdout(text: &str) -> anyhow::Result<()> {
         .and_then(|()| out.flush())
         .context("writing to standard output")
 }
+
+/// Writes `value` to standard output as pretty-printed JSON and a newline ([`write_stdout`]).
+pub fn write_json<T: serde::Serialize>(value: &T) -> anyhow::Result<()> {
+    write_stdout(&format!("{}\n", serde_json::to_string_pretty(value)?))
+}

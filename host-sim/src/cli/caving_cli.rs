@@ -111,7 +111,7 @@ pub fn run_cli(args: &CavingArgs) -> Result<()> {
         write_plots(&report, dir)?;
     }
     if args.json {
-        crate::report::write_stdout(&format!("{}\n", serde_json::to_string_pretty(&report)?))
+        crate::report::write_json(&report)
     } else {
         crate::report::write_stdout(&table(&report))
     }

@@ -1169,12 +1169,11 @@ pub fn run(cfg: &PaperConfig, out: &Path) -> anyhow::Result<()> {
 
 /// Lists the files a command wrote, after a blank line.
 pub(crate) fn print_written(files: &[std::path::PathBuf]) -> anyhow::Result<()> {
-    crate::report::write_stdout("\n")?;
-    crate::report::write_stdout("Wrote:\n")?;
-    for f in files {
-        crate::report::write_stdout(&format!("  {}\n", f.display()))?;
-    }
-    Ok(())
+    let list: String = files
+        .iter()
+        .map(|f| format!("  {}\n", f.display()))
+        .collect();
+    crate::report::write_stdout(&format!("\nWrote:\n{list}"))
 }
 
 #[cfg(test)]

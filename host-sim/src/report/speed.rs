@@ -343,7 +343,7 @@ fn ratios(r: &SpeedReport) -> String {
 pub fn run(args: &SpeedOptions) -> Result<()> {
     let r = measure(args)?;
     if args.json {
-        crate::report::write_stdout(&format!("{}\n", serde_json::to_string_pretty(&r)?))
+        crate::report::write_json(&r)
     } else {
         crate::report::write_stdout(&render(&r))
     }
