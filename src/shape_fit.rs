@@ -271,10 +271,36 @@ pub(crate) fn gauss_newton_of(
     shape: impl Fn(f32) -> (f32, f32),
     extra: &[[f32; 4]],
 ) -> Option<([f32; 3], Matrix3, [f32; 3])> {
+    damped_gauss_newton(ks, ys, p, shape, extra, 0.0)
+}
+
+/// The relative damping `lambda` of a Levenberg-Marquardt step ([`damped_gauss_newton`]),
+/// which [`descend`] takes where the plain Gauss-Newton equations are singular. With it
+/// `N + lambda diag(N)` is never singular to [`inverse3`]'s test while `diag(N)` has no zero:
+/// for positive semi-definite `N`, `det(N + lambda D) >= lambda^3 det D` (Minkowski's
+/// determinant inequality), and `(lambda / (1 + lambda))^3 = 2.5e-5` is above that test's
+/// `1e-6`.
+#[cfg(feature = "pulse_shape")]
+const MARQUARDT_DAMPING: f32 = 0.03;
+
+/// [`gauss_newton_of`] with the normal equations' diagonal scaled by `1 + damping`
+/// (Marquardt's step, which turns from Gauss-Newton's towards the gradient's, scaled per
+/// parameter, as `damping` grows); `damping = 0` is the plain step.
+fn damped_gauss_newton(
+    ks: &[f32],
+    ys: &[f32],
+    p: [f32; 3],
+    shape: impl Fn(f32) -> (f32, f32),
+    extra: &[[f32; 4]],
+    damping: f32,
+) -> Option<([f32; 3], Matrix3, [f32; 3])> {
     let (mut n, mut b, c) = normal_equations(ks, ys, p, shape);
     for &[e1, e2, e3, r] in extra {
         add_row(&mut n, &mut b, [e1, e2, e3], r);
     }
+    let scale = 1.0 + damping;
+    let [n11, n12, n13, n22, n23, n33] = n;
+    let n = [n11 * scale, n12, n13, n22 * scale, n23, n33 * scale];
     let inv = inverse3(&n)?;
     let step = inv.map(|row| row[0] * b[0] + row[1] * b[1] + row[2] * b[2]);
     Some(([p[0] + step[0], p[1] + step[1], p[2] + step[2]], inv, c))
@@ -312,9 +338,12 @@ pub(crate) const HALVINGS: usize = 6;
 /// over the samples `ys` at `ks` and the weighted extra rows that `residual(p)` builds with
 /// the residual sum of squares at `p`, each halved until it lowers that residual (the steep
 /// flank of a damped pulse can throw a full step off the pulse) and kept in range by
-/// `keep(step, floor)` (`floor`: half the current `F_max`); none that does: converged. The
-/// point reached, its residual and the extra rows `residual` built there; `None` for
-/// singular normal equations, or a residual not taken at `p`.
+/// `keep(step, floor)` (`floor`: half the current `F_max`); none that does: converged. Where
+/// the normal equations are singular (a clipped pulse's flank samples that lie before the
+/// contact's start at `p` add nothing to them, and the rest may not pin three unknowns) the
+/// step is Marquardt's ([`MARQUARDT_DAMPING`]). The point reached, its residual and the
+/// extra rows `residual` built there; `None` for normal equations singular even so (a
+/// parameter that no row moves), or a residual not taken at `p`.
 #[cfg(feature = "pulse_shape")]
 pub(crate) fn descend<const R: usize>(
     (ks, ys): (&[f32], &[f32]),
@@ -325,7 +354,8 @@ pub(crate) fn descend<const R: usize>(
 ) -> Option<([f32; 3], f32, [[f32; 4]; R])> {
     let (mut best, mut rows) = residual(p)?;
     for _ in 0..STEPS {
-        let (next, _, _) = gauss_newton_of(ks, ys, p, &shape, &rows)?;
+        let (next, _, _) = gauss_newton_of(ks, ys, p, &shape, &rows)
+            .or_else(|| damped_gauss_newton(ks, ys, p, &shape, &rows, MARQUARDT_DAMPING))?;
         let mut scale = 1.0;
         let mut moved = false;
         for _ in 0..HALVINGS {
@@ -615,4 +645,57 @@ fn flank_step(
         d.max(d_lo).min(d_hi),
     ];
     Some(inv)
+}
+
+#[cfg(all(test, feature = "pulse_shape"))]
+mod tests {
+    use super::*;
+
+    /// A pulse of compact support, `g(x) = 1 - x^2` on `|x| < 1` (0 outside), and its slope.
+    fn parabola(x: f32) -> (f32, f32) {
+        if x.abs() < 1.0 {
+            (1.0 - x * x, -2.0 * x)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
+    /// The parabola's area `F_max (4/3) / d` as an extra row at `p` (as the pulse's sum is one
+    /// beside a clipped pulse's flank samples): its gradient and its residual against `area`.
+    fn area_row([peak, _, d]: [f32; 3], area: f32) -> [f32; 4] {
+        let a = 4.0 / (3.0 * d);
+        [a, 0.0, -peak * a / d, area - peak * a]
+    }
+
+    /// Two samples before the pulse (0, as a clipped pulse's before its contact) and two on its
+    /// falling flank, with the area. From a start whose pulse covers one of them, the
+    /// Gauss-Newton equations are singular (that sample's row and the area's, three unknowns);
+    /// Marquardt's steps widen the pulse until the other counts, and the descent reaches the
+    /// exact `F_max 100`, `k_peak 0`, `d 0.5` that the samples and the area were made from.
+    #[test]
+    fn a_descent_from_singular_equations_reaches_the_pulse() {
+        let truth = [100.0f32, 0.0, 0.5];
+        let ks = [-3.0f32, -2.5, 1.0, 1.5];
+        let ys = ks.map(|k| truth[0] * parabola(truth[2] * (k - truth[1])).0);
+        let area = area_row(truth, 0.0)[3].abs();
+        let start = [80.0, 0.5, 1.2];
+        // Only k = 1 lies within |1.2 (k - 0.5)| < 1.
+        assert!(gauss_newton_of(&ks, &ys, start, parabola, &[area_row(start, area)]).is_none());
+        let residual = |p: [f32; 3]| {
+            let row = area_row(p, area);
+            let rss = ks.iter().zip(&ys).fold(row[3] * row[3], |a, (&k, &y)| {
+                let e = y - p[0] * parabola(p[2] * (k - p[1])).0;
+                a + e * e
+            });
+            Some((rss, [row]))
+        };
+        let keep = |p: [f32; 3], floor: f32| [p[0].max(floor), p[1], p[2].max(0.05)];
+        let found = descend((&ks, &ys), start, parabola, residual, keep);
+        assert!(found.is_some(), "the damped steps descend");
+        let Some((p, rss, _)) = found else { return };
+        assert!((p[0] - truth[0]).abs() < 1e-2, "F_max {}", p[0]);
+        assert!((p[1] - truth[1]).abs() < 1e-3, "k_peak {}", p[1]);
+        assert!((p[2] - truth[2]).abs() < 1e-4, "d {}", p[2]);
+        assert!(rss < 1e-3, "rss {rss}");
+    }
 }
