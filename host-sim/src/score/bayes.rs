@@ -163,8 +163,7 @@ impl ClassModel {
         let (y0, y1) = self.ln_speed;
         let beta = self.speed_beta;
         let integral = gauss_legendre(lo, hi, |x| {
-            let gx = (-(x - mx).powi(2) / (2.0 * sxx)).exp()
-                / (sx * (2.0 * std::f64::consts::PI).sqrt());
+            let gx = normal_pdf((x - mx) / sx) / sx;
             let m = my + sxy / sxx * (x - mx);
             // integral_{y0}^{y1} p(y) N(y; m, s^2) dy, closed form.
             let py = if beta.abs() < 1e-12 {
@@ -273,9 +272,14 @@ pub(crate) fn gauss_pair(uniform: &mut impl FnMut() -> f64) -> (f64, f64) {
     (r * t.cos(), r * t.sin())
 }
 
-/// Standard normal CDF.
+/// The standard normal distribution function, `Phi(x) = erfc(-x / sqrt 2) / 2`.
 pub(crate) fn phi(x: f64) -> f64 {
     0.5 * libm::erfc(-x / std::f64::consts::SQRT_2)
+}
+
+/// The standard normal density, `exp(-x^2 / 2) / sqrt(2 pi)`.
+pub(crate) fn normal_pdf(x: f64) -> f64 {
+    (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt()
 }
 
 /// 32-point Gauss-Legendre quadrature of `f` over `[a, b]`.

@@ -42,7 +42,7 @@
 //! `max(MARGIN_SAMPLES, duration)` after its end (the quiet samples around a pulse fix the
 //! baseline; what a chain rings beyond that window is left out).
 
-use crate::score::bayes::phi;
+use crate::score::bayes::{normal_pdf as pdf, phi};
 use crate::sim::sensor::{FnForce, ForcePulse, Sensor};
 
 /// Quiet samples in the window before a pulse's onset (the kernel's pre-trigger ring holds 32).
@@ -107,7 +107,6 @@ pub fn censored_share(mean_counts: f64, sigma_counts: f64, lo_counts: f64, hi_co
         (lo_counts - mean_counts) / sigma_counts,
         (hi_counts - mean_counts) / sigma_counts,
     );
-    let pdf = |x: f64| (-0.5 * x * x).exp() / (2.0 * std::f64::consts::PI).sqrt();
     let mass = |density: f64, tail: f64| {
         if tail > 0.0 {
             density * density / tail

@@ -64,7 +64,7 @@ use crate::physics::integrate::SimError;
 use crate::physics::law_spec::LawSpec;
 use crate::scene::{SceneError, SceneFile};
 use crate::score::bayes::{
-    ClassModel, FeatureNoise, class_models, gauss_legendre, gauss_pair, phi,
+    ClassModel, FeatureNoise, class_models, gauss_legendre, gauss_pair, normal_pdf, phi,
 };
 use crate::score::crb::{FeatureCovariance, phase_averaged_bound};
 use crate::sim::sensor::{ForcePulse, PulseShape, Sensor};
@@ -526,8 +526,7 @@ impl ClassMap {
         // x given y: mean mx + sxy / syy (y - my), variance sxx - sxy^2 / syy.
         let cond_s = (sxx - sxy * sxy / syy).max(1e-30).sqrt();
         let integrand = |y: f64| {
-            let gy = (-(y - my).powi(2) / (2.0 * syy)).exp()
-                / (sy * (2.0 * std::f64::consts::PI).sqrt());
+            let gy = normal_pdf((y - my) / sy) / sy;
             let m = mx + sxy / syy * (y - my);
             let px_box = phi((x1 - m) / cond_s) - phi((x0 - m) / cond_s);
             self.model.speed_density(y) * gy * px_box
