@@ -54,16 +54,14 @@ const RSS_MAX: f32 = 16.0;
 /// the weighted least-squares fit of the model in the module's docs, the least residual of
 /// four descents by Gauss-Newton steps, each from the best start of a scan in its band
 /// of durations (more fits hold than from the best start alone). Its sigmas come from the
-/// normal equations of the samples that see the pulse (a force of four of their sigmas or
-/// more: below it, at a contact's end, the fit sits on the kink between no force and the
-/// flank, and the sample's slope would claim an end it does not pin), their gains over a noise
-/// variance of 1 ([`FlankFit::gains`]: the rows are weighted). The samples beyond the five
+/// normal equations of the samples that see the pulse (a force of `SEEN` of their sigmas or
+/// more), their gains over a noise variance of 1 ([`FlankFit::gains`]: the rows are
+/// weighted). The samples beyond the five
 /// are not read (a damped contact's long tail may reach them, with little force). `None`
 /// (the caller keeps its own measurement) without a table, for a fit held at the bounds its
 /// steps keep it in (`r` within `r0 / 4..4 r0`, `r0` from the measured duration; the peak
-/// within 1.5 samples of the largest), a weighted residual above 16 (two degrees of freedom:
-/// exceeded with probability 3e-4 by noise alone), fewer than three samples that see the
-/// pulse, or singular equations.
+/// within 1.5 samples of the largest), a weighted residual above `RSS_MAX`, fewer than three
+/// samples that see the pulse, or singular equations.
 ///
 /// ```
 /// use coalshock::pulse_shape::PulseShape;
