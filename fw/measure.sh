@@ -13,6 +13,9 @@
 # (`front_end_ok`), and its sizes are reported.
 # Also builds the reference node (fw/src/bin/reference_node.rs, feature `board`, profile
 # `board`) and budgets its flash and static RAM.
+# Also builds the node without the kernel's `settle` (fw feature `settle`, a default one; build
+# only): what the feature adds to the measuring node's flash (`settle_flash_added_bytes`, from
+# `nosettle_flash_code_bytes`); its RAM per monitor is the node's `settle_bytes`.
 # Also builds the node and the reference node with the yield feature (`plasticity`) and runs the
 # node with the yielding scene: the feature's flash, RAM, stack and instructions are budgeted
 # (`plasticity_*`, `yield_*`), and the non-yielding scenes must give the default node's lines.
@@ -228,6 +231,23 @@ for key, a, b in [
     if a in m and b in m:
         print(f"{key} {int(m[a]) - int(m[b])}")
 PY
+
+section "settle: the node without the kernel's settle (build only)"
+# The measuring node built without the fw feature `settle` (`--no-default-features`): the same
+# image as the default one but for the kernel's `settle`, whose monitor slot is then `NoSettle`
+# (no RAM). `settle_flash_added_bytes` is the default node's `flash_code_bytes` minus this
+# one's (`nosettle_flash_code_bytes`): the flash the feature adds to the measuring node (both
+# backends, opt-level 3). Its RAM per monitor is the node's `settle_bytes`.
+fwcargo build --release --target thumbv7em-none-eabihf --bin node --no-default-features
+sizes "$elf" "nosettle_" "$streams_node" | grep '_flash_code_bytes ' \
+    | tee -a "$out/measures.txt"
+python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
+import sys
+m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
+print(f"settle_flash_added_bytes "
+      f"{int(m['flash_code_bytes']) - int(m['nosettle_flash_code_bytes'])}")
+PY
+
 # Leave the default images in place (cached: no rebuild).
 fwcargo build --release --target thumbv7em-none-eabihf --bin node
 fwcargo build --profile board --no-default-features --features board --bin reference_node

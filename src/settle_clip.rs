@@ -21,7 +21,8 @@
 //!
 //! **Cost.** The shadows run from the anchor to the window's first sample, at most
 //! [`MAX_TO_WINDOW`] samples (a pulse's tail: tens to a few thousand), once per clipped
-//! pulse; 100 B more per [`crate::settle::Settler`].
+//! pulse; 100 B more per [`crate::settle::Settler`] (an `Option<ClipColumns>`,
+//! `tests/sizes.rs`).
 
 use crate::equaliser::{EqualiserDesign, SECTION_STATES as UNKNOWNS, SectionStates};
 

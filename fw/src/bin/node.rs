@@ -622,6 +622,13 @@ fn main() -> ! {
         "counters_bytes",
         core::mem::size_of::<Counters<DEFAULT_CLASSES>>() as u64,
     );
+    // The monitor's slot for the equaliser's state re-estimation: the kernel's `Settler` with
+    // the feature `settle`, its zero-size `NoSettle` without it.
+    #[cfg(feature = "settle")]
+    type SettleSlot = coalshock::settle::Settler;
+    #[cfg(not(feature = "settle"))]
+    type SettleSlot = coalshock::settle::NoSettle;
+    measure("settle_bytes", core::mem::size_of::<SettleSlot>() as u64);
     report("", default, &clock);
     // Quiet blocks through `feed_slice` on the chain scene, as `insns_quiet_block_sample_mean`.
     measure("insns_chain_scene_build", clock.insns(chain_scene_ticks, 1));

@@ -1,0 +1,32 @@
+//! The RAM the optional features add, as `Cargo.toml` and the types' docs state it: each
+//! figure is `size_of` of the type the feature adds (host target; the same layout of `f32`
+//! fields on a Cortex-M).
+
+use core::mem::size_of;
+
+/// `pulse_shape`: one `PulseShape` per `Settings`, 544 B (65 points of `g` and `dg/du`, 520 B,
+/// and its area, peak, reach and errors).
+#[cfg(feature = "pulse_shape")]
+#[test]
+fn a_pulse_shape_takes_544_bytes() {
+    use coalshock::pulse_shape::{PulseShape, SHAPE_POINTS};
+    assert_eq!(2 * SHAPE_POINTS * size_of::<f32>(), 520);
+    assert_eq!(size_of::<PulseShape>(), 544);
+}
+
+/// `pulse_shape` with `settle`: one `Option<ClipColumns>` per `Settler`, 100 B (three columns
+/// of the sections' states, `3 x 8 x 4` B, and the option's tag).
+#[cfg(all(feature = "pulse_shape", feature = "settle"))]
+#[test]
+fn a_settler_holds_100_bytes_of_clip_columns() {
+    use coalshock::settle_clip::ClipColumns;
+    assert_eq!(size_of::<ClipColumns>(), 3 * 8 * size_of::<f32>());
+    assert_eq!(size_of::<Option<ClipColumns>>(), 100);
+}
+
+/// `sampled_phase`: one `SampledPhase` per `Settings`, 1 360 B.
+#[cfg(feature = "sampled_phase")]
+#[test]
+fn a_sampled_phase_table_takes_1360_bytes() {
+    assert_eq!(size_of::<coalshock::SampledPhase>(), 1360);
+}
