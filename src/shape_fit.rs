@@ -271,10 +271,10 @@ pub(crate) fn gauss_newton_of(
     shape: impl Fn(f32) -> (f32, f32),
     extra: &[[f32; 4]],
 ) -> Option<([f32; 3], Matrix3, [f32; 3])> {
-    damped_gauss_newton(ks, ys, p, shape, extra, 0.0)
+    damped_step(p, &all_normal_equations(ks, ys, p, shape, extra), 0.0)
 }
 
-/// The relative damping `lambda` of a Levenberg-Marquardt step ([`damped_gauss_newton`]),
+/// The relative damping `lambda` of a Levenberg-Marquardt step ([`damped_step`]),
 /// which [`descend`] takes where the plain Gauss-Newton equations are singular. With it
 /// `N + lambda diag(N)` is never singular to [`inverse3`]'s test while `diag(N)` has no zero:
 /// for positive semi-definite `N`, `det(N + lambda D) >= lambda^3 det D` (Minkowski's
@@ -283,21 +283,32 @@ pub(crate) fn gauss_newton_of(
 #[cfg(feature = "pulse_shape")]
 const MARQUARDT_DAMPING: f32 = 0.03;
 
-/// [`gauss_newton_of`] with the normal equations' diagonal scaled by `1 + damping`
-/// (Marquardt's step, which turns from Gauss-Newton's towards the gradient's, scaled per
-/// parameter, as `damping` grows); `damping = 0` is the plain step.
-fn damped_gauss_newton(
+/// The normal equations `(N, b, c)` of [`normal_equations`] over the samples `ys` at `ks`,
+/// with the `extra` rows ([`gauss_newton_of`]) added to `N` and `b`.
+fn all_normal_equations(
     ks: &[f32],
     ys: &[f32],
     p: [f32; 3],
     shape: impl Fn(f32) -> (f32, f32),
     extra: &[[f32; 4]],
-    damping: f32,
-) -> Option<([f32; 3], Matrix3, [f32; 3])> {
+) -> ([f32; 6], [f32; 3], [f32; 3]) {
     let (mut n, mut b, c) = normal_equations(ks, ys, p, shape);
     for &[e1, e2, e3, r] in extra {
         add_row(&mut n, &mut b, [e1, e2, e3], r);
     }
+    (n, b, c)
+}
+
+/// The step from `p` by the normal equations `(N, b, c)` ([`all_normal_equations`]) with
+/// `N`'s diagonal scaled by `1 + damping` (Marquardt's step, which turns from
+/// Gauss-Newton's towards the gradient's, scaled per parameter, as `damping` grows;
+/// `damping = 0` is the plain step): the new parameters `p + (N + damping diag N)^-1 b`, that
+/// inverse and `c`; `None` when the scaled `N` is singular.
+fn damped_step(
+    p: [f32; 3],
+    &(n, b, c): &([f32; 6], [f32; 3], [f32; 3]),
+    damping: f32,
+) -> Option<([f32; 3], Matrix3, [f32; 3])> {
     let scale = 1.0 + damping;
     let [n11, n12, n13, n22, n23, n33] = n;
     let n = [n11 * scale, n12, n13, n22 * scale, n23, n33 * scale];
@@ -354,8 +365,9 @@ pub(crate) fn descend<const R: usize>(
 ) -> Option<([f32; 3], f32, [[f32; 4]; R])> {
     let (mut best, mut rows) = residual(p)?;
     for _ in 0..STEPS {
-        let (next, _, _) = gauss_newton_of(ks, ys, p, &shape, &rows)
-            .or_else(|| damped_gauss_newton(ks, ys, p, &shape, &rows, MARQUARDT_DAMPING))?;
+        let equations = all_normal_equations(ks, ys, p, &shape, &rows);
+        let (next, _, _) = damped_step(p, &equations, 0.0)
+            .or_else(|| damped_step(p, &equations, MARQUARDT_DAMPING))?;
         let mut scale = 1.0;
         let mut moved = false;
         for _ in 0..HALVINGS {
