@@ -311,23 +311,28 @@ fn run_stream(args: &StreamArgs) -> Result<()> {
     print_summary(&stream, &from, args.seed, &bin, &csv)
 }
 
+/// Prints what the stream holds (impacts per class, its faults) and the files written, in one
+/// write.
 fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) -> Result<()> {
     let count = |f: ImpactFault| s.truth.iter().filter(|t| t.fault == f).count();
     let events = |k: FaultKind| s.events.iter().filter(|e| e.kind == k).count();
+    let classes: String = s
+        .class_names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let n = s.truth.iter().filter(|t| t.class == i).count();
+            format!("  {name}: {n}\n")
+        })
+        .collect();
     write_stdout(&format!(
-        "{} impacts of {scene} (seed {seed}) in {} samples at {} Hz ({:.3} s)\n",
+        "{} impacts of {scene} (seed {seed}) in {} samples at {} Hz ({:.3} s)\n{classes}\
+         faults: {} pile-up impacts, {} saturated, {} gaps in pulses, {} truncated, {} gaps \
+         ({} samples lost), {} spikes, {} stuck runs\nwrote {} and {}\n",
         s.truth.len(),
         s.timeline_samples,
         s.sample_rate_hz,
-        s.timeline_samples as f64 / s.sample_rate_hz
-    ))?;
-    for (i, name) in s.class_names.iter().enumerate() {
-        let n = s.truth.iter().filter(|t| t.class == i).count();
-        write_stdout(&format!("  {name}: {n}\n"))?;
-    }
-    write_stdout(&format!(
-        "faults: {} pile-up impacts, {} saturated, {} gaps in pulses, {} truncated, {} gaps \
-         ({} samples lost), {} spikes, {} stuck runs\n",
+        s.timeline_samples as f64 / s.sample_rate_hz,
         count(ImpactFault::PileUp),
         count(ImpactFault::Saturated),
         count(ImpactFault::Gap),
@@ -335,9 +340,10 @@ fn print_summary(s: &Stream, scene: &str, seed: u64, bin: &Path, csv: &Path) -> 
         s.gaps.len(),
         s.gaps.iter().map(|g| g.lost as u64).sum::<u64>(),
         events(FaultKind::Spike),
-        events(FaultKind::Stuck)
-    ))?;
-    write_stdout(&format!("wrote {} and {}\n", bin.display(), csv.display()))
+        events(FaultKind::Stuck),
+        bin.display(),
+        csv.display()
+    ))
 }
 
 /// Runs the command; an error is the user's to read, its causes after it, without a stack

@@ -302,27 +302,28 @@ fn print_bayes(scene: &SceneFile, draws: usize, seed: u64) -> anyhow::Result<()>
 pub fn run(args: &PlasticityOptions) -> anyhow::Result<()> {
     let scene = scene::load(&args.scene)?;
     let rows = sweep(&scene, args.radius_m, args.points)?;
-    write_stdout(
-        "class  R (m)  u (m/s)  F_Hertz (N)  F_yield (N)  t_Hertz (us)  t_yield (us)  e\n",
-    )?;
     let every = ((args.points - 1) / 4).max(1);
-    for (_, r) in rows
+    let table: String = rows
         .iter()
         .enumerate()
         .filter(|(i, _)| (i % args.points).is_multiple_of(every))
-    {
-        write_stdout(&format!(
-            "{}  {:.4}  {:.2}  {:.0}  {:.0}  {:.1}  {:.1}  {:.3}\n",
-            r.class,
-            r.radius_m,
-            r.speed_m_s,
-            r.elastic_force_n,
-            r.yield_force_n,
-            r.elastic_duration_s * 1e6,
-            r.yield_duration_s * 1e6,
-            r.yield_restitution
-        ))?;
-    }
+        .map(|(_, r)| {
+            format!(
+                "{}  {:.4}  {:.2}  {:.0}  {:.0}  {:.1}  {:.1}  {:.3}\n",
+                r.class,
+                r.radius_m,
+                r.speed_m_s,
+                r.elastic_force_n,
+                r.yield_force_n,
+                r.elastic_duration_s * 1e6,
+                r.yield_duration_s * 1e6,
+                r.yield_restitution
+            )
+        })
+        .collect();
+    write_stdout(&format!(
+        "class  R (m)  u (m/s)  F_Hertz (N)  F_yield (N)  t_Hertz (us)  t_yield (us)  e\n{table}"
+    ))?;
     if args.bayes_draws > 0 {
         print_bayes(&scene, args.bayes_draws, args.seed)?;
     }

@@ -111,8 +111,11 @@ pub fn run(args: &TradeoffOptions) -> Result<()> {
     };
     let fw = FirmwareFigures::load(args.fw_measures.as_deref())?;
     let t = compute(&cfg, fw)?;
-    crate::report::write_stdout(&render_table(&t))?;
-    crate::report::write_stdout(&format!("Run time: {:.1} s.\n", t.runtime_s))?;
+    crate::report::write_stdout(&format!(
+        "{}Run time: {:.1} s.\n",
+        render_table(&t),
+        t.runtime_s
+    ))?;
     let files = write_outputs(&t, &args.out)?;
     crate::report::paper::print_written(&files)
 }
