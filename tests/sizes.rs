@@ -2,16 +2,14 @@
 //! figure is `size_of` of the type the feature adds (host target; the same layout of `f32`
 //! fields on a Cortex-M).
 
-use core::mem::size_of;
-
 /// `pulse_shape`: one `PulseShape` per `Settings`, 544 B (65 points of `g` and `dg/du`, 520 B,
 /// and its area, peak, reach and errors).
 #[cfg(feature = "pulse_shape")]
 #[test]
 fn a_pulse_shape_takes_544_bytes() {
     use coalshock::pulse_shape::{PulseShape, SHAPE_POINTS};
-    assert_eq!(2 * SHAPE_POINTS * size_of::<f32>(), 520);
-    assert_eq!(size_of::<PulseShape>(), 544);
+    assert_eq!(2 * SHAPE_POINTS * core::mem::size_of::<f32>(), 520);
+    assert_eq!(core::mem::size_of::<PulseShape>(), 544);
 }
 
 /// `pulse_shape` with `settle`: one `Option<ClipColumns>` per `Settler`, 100 B (three columns
@@ -20,13 +18,16 @@ fn a_pulse_shape_takes_544_bytes() {
 #[test]
 fn a_settler_holds_100_bytes_of_clip_columns() {
     use coalshock::settle_clip::ClipColumns;
-    assert_eq!(size_of::<ClipColumns>(), 3 * 8 * size_of::<f32>());
-    assert_eq!(size_of::<Option<ClipColumns>>(), 100);
+    assert_eq!(
+        core::mem::size_of::<ClipColumns>(),
+        3 * 8 * core::mem::size_of::<f32>()
+    );
+    assert_eq!(core::mem::size_of::<Option<ClipColumns>>(), 100);
 }
 
 /// `sampled_phase`: one `SampledPhase` per `Settings`, 1 360 B.
 #[cfg(feature = "sampled_phase")]
 #[test]
 fn a_sampled_phase_table_takes_1360_bytes() {
-    assert_eq!(size_of::<coalshock::SampledPhase>(), 1360);
+    assert_eq!(core::mem::size_of::<coalshock::SampledPhase>(), 1360);
 }
