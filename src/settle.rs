@@ -46,7 +46,7 @@
 //!
 //! **Cost.** Behind a rigid chain nothing arms it. It is the cargo feature `settle` (on by
 //! default): on a Cortex-M4F 2.5 KB of flash on a size-optimised node with one math backend
-//! (5.0 KB on the measuring node, which carries both) and 600 B of RAM in every
+//! (6.0 KB on the measuring node, which carries both) and 592 B of RAM in every
 //! [`crate::Monitor`]; without it a monitor carries [`NoSettle`], which takes no sample, and
 //! an equaliser left off the chain's state rings until its own damping ends it.
 
