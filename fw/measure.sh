@@ -219,18 +219,6 @@ sizes "$elf" "plasticity_kernel_" "$streams_node" | grep '_flash_code_bytes ' \
 fwcargo build --profile board --no-default-features --features board,coalshock/plasticity --bin reference_node
 sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_plasticity_" 0 \
     | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
-python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
-import sys
-m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
-for key, a, b in [
-    ("plasticity_flash_added_bytes", "plasticity_kernel_flash_code_bytes", "flash_code_bytes"),
-    ("reference_node_plasticity_flash_added_bytes", "reference_node_plasticity_flash_bytes",
-     "reference_node_flash_bytes"),
-    ("plasticity_kernel_ram_added_bytes", "plasticity_kernel_ram_bytes", "kernel_ram_bytes"),
-]:
-    if a in m and b in m:
-        print(f"{key} {int(m[a]) - int(m[b])}")
-PY
 
 section "settle: the node without the kernel's settle (build only)"
 # The measuring node built without the fw feature `settle` (`--no-default-features`): the same
@@ -241,11 +229,19 @@ section "settle: the node without the kernel's settle (build only)"
 fwcargo build --release --target thumbv7em-none-eabihf --bin node --no-default-features
 sizes "$elf" "nosettle_" "$streams_node" | grep '_flash_code_bytes ' \
     | tee -a "$out/measures.txt"
+# What the plasticity and settle features add: differences of the builds above.
 python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
 import sys
 m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
-print(f"settle_flash_added_bytes "
-      f"{int(m['flash_code_bytes']) - int(m['nosettle_flash_code_bytes'])}")
+for key, a, b in [
+    ("plasticity_flash_added_bytes", "plasticity_kernel_flash_code_bytes", "flash_code_bytes"),
+    ("reference_node_plasticity_flash_added_bytes", "reference_node_plasticity_flash_bytes",
+     "reference_node_flash_bytes"),
+    ("plasticity_kernel_ram_added_bytes", "plasticity_kernel_ram_bytes", "kernel_ram_bytes"),
+    ("settle_flash_added_bytes", "flash_code_bytes", "nosettle_flash_code_bytes"),
+]:
+    if a in m and b in m:
+        print(f"{key} {int(m[a]) - int(m[b])}")
 PY
 
 # Leave the default images in place (cached: no rebuild).

@@ -24,6 +24,7 @@ use coalshock::equaliser::EqualiserDesign;
 use coalshock::math::Libm;
 use coalshock::shape_fit::{PEAK_OMEGA, five_about, peak_fit, peak_shape};
 use host_sim::bridge::kernel_scene::scene_to_kernel;
+use host_sim::calibrate::mean_and_sigma;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -187,8 +188,8 @@ fn fit(y: &[f64], lo: usize, hi: usize, five: bool) -> Option<(f64, f64)> {
     Some((f64::from(f.peak), f64::from(f.gain2)))
 }
 
-/// Sample variance of `d`.
+/// Variance of `d` about its mean (`host_sim::calibrate::mean_and_sigma`).
 fn variance(d: &[f64]) -> f64 {
-    let m = d.iter().sum::<f64>() / d.len() as f64;
-    d.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (d.len() - 1) as f64
+    let (_, sigma) = mean_and_sigma(d);
+    sigma * sigma
 }
