@@ -1,6 +1,6 @@
-//! The RAM the optional features add, as `Cargo.toml` and the types' docs state it: each
-//! figure is `size_of` of the type the feature adds (host target; the same layout of `f32`
-//! fields on a Cortex-M).
+//! The RAM the optional features and the optional flow monitor add, as `Cargo.toml`, the
+//! types' docs and `docs/caving.md` state it: each figure is `size_of` of the type added (host
+//! target; the same layout of `f32` fields on a Cortex-M).
 
 /// `pulse_shape`: one `PulseShape` per `Settings`, 544 B (65 points of `g` and `dg/du`, 520 B,
 /// and its area, peak, reach and errors).
@@ -30,4 +30,17 @@ fn a_settler_holds_100_bytes_of_clip_columns() {
 #[test]
 fn a_sampled_phase_table_takes_1360_bytes() {
     assert_eq!(core::mem::size_of::<coalshock::SampledPhase>(), 1360);
+}
+
+/// The flow monitor (`Monitor::with_flow`), with or without any feature: a `FlowMonitor` holds
+/// 204 B, 128 B of them the log priors of up to `MAX_CLASSES` (32) classes; its config, 20 B.
+#[test]
+fn a_flow_monitor_takes_204_bytes() {
+    use coalshock::math::{Libm, Micromath};
+    use coalshock::scene::MAX_CLASSES;
+    use coalshock::{FlowConfig, FlowMonitor};
+    assert_eq!(MAX_CLASSES * core::mem::size_of::<f32>(), 128);
+    assert_eq!(core::mem::size_of::<FlowConfig>(), 20);
+    assert_eq!(core::mem::size_of::<FlowMonitor<Libm>>(), 204);
+    assert_eq!(core::mem::size_of::<FlowMonitor<Micromath>>(), 204);
 }
