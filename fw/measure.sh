@@ -15,7 +15,10 @@
 # `board`) and budgets its flash and static RAM.
 # Also builds the node without the kernel's `settle` (fw feature `settle`, a default one; build
 # only): what the feature adds to the measuring node's flash (`settle_flash_added_bytes`, from
-# `nosettle_flash_code_bytes`); its RAM per monitor is the node's `settle_bytes`.
+# `nosettle_flash_code_bytes`); its RAM per monitor is the node's `settle_bytes`. The same for
+# the kernel's `noise_colour` (`noise_colour_flash_added_bytes`, from
+# `nocolour_flash_code_bytes`), whose node is also run for the instructions the feature adds
+# (`noise_colour_insns_*_added`).
 # Also builds the node and the reference node with the yield feature (`plasticity`) and runs the
 # node with the yielding scene: the feature's flash, RAM, stack and instructions are budgeted
 # (`plasticity_*`, `yield_*`), and the non-yielding scenes must give the default node's lines.
@@ -25,7 +28,8 @@
 #
 # Outputs go to $FW_OUT (default: <cargo target dir>/fw): node.txt (decoded node output),
 # measures.txt (every figure as `key value`), nopanic.txt, budget.md, front_end.txt, the
-# same for M0, and node-plasticity (ELF), node-plasticity.txt, nopanic-plasticity.txt.
+# same for M0, node-plasticity (ELF), node-plasticity.txt, nopanic-plasticity.txt and
+# node-nocolour.txt.
 # Environment: FW_SKIP_M0=1 skips the Cortex-M0 build and run.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -169,7 +173,7 @@ sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_"
 # The same node with the kernel's `settle` (fw feature `settle`, a default one): what the
 # equaliser's state re-estimation adds to a size-optimised node with one backend, as a node
 # on a chain scene would carry it (`reference_node_settle_flash_added_bytes`).
-fwcargo build --profile board --features board --bin reference_node
+fwcargo build --profile board --no-default-features --features board,settle --bin reference_node
 sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_settle_" 0 \
     | grep '_flash_bytes ' | tee -a "$out/measures.txt"
 python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
@@ -232,16 +236,37 @@ fwcargo build --profile board --no-default-features --features board,coalshock/p
 sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_plasticity_" 0 \
     | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
 
-section "settle: the node without the kernel's settle (build only)"
-# The measuring node built without the fw feature `settle` (`--no-default-features`): the same
-# image as the default one but for the kernel's `settle`, whose monitor slot is then `NoSettle`
-# (no RAM). `settle_flash_added_bytes` is the default node's `flash_code_bytes` minus this
-# one's (`nosettle_flash_code_bytes`): the flash the feature adds to the measuring node (both
-# backends, opt-level 3). Its RAM per monitor is the node's `settle_bytes`.
-fwcargo build --release --target thumbv7em-none-eabihf --bin node --no-default-features
+section "settle and noise_colour: the node without each of the kernel's features"
+# The measuring node built without the fw feature `settle` (`--no-default-features --features
+# noise_colour`): the same image as the default one but for the kernel's `settle`, whose
+# monitor slot is then `NoSettle` (no RAM). `settle_flash_added_bytes` is the default node's
+# `flash_code_bytes` minus this one's (`nosettle_flash_code_bytes`): the flash the feature adds
+# to the measuring node (both backends, opt-level 3). Its RAM per monitor is the node's
+# `settle_bytes`.
+fwcargo build --release --target thumbv7em-none-eabihf --bin node --no-default-features \
+    --features noise_colour
 sizes "$elf" "nosettle_" "$streams_node" | grep '_flash_code_bytes ' \
     | tee -a "$out/measures.txt"
-# What the plasticity and settle features add: differences of the builds above.
+# The same without the fw feature `noise_colour` (`--no-default-features --features settle`):
+# `noise_colour_flash_added_bytes` is what the kernel's `noise_colour` adds (the colour's pass
+# in the equaliser's design, the fits' weights and their quadratic form in the detector).
+fwcargo build --release --target thumbv7em-none-eabihf --bin node --no-default-features \
+    --features settle
+sizes "$elf" "nocolour_" "$streams_node" | grep '_flash_code_bytes ' \
+    | tee -a "$out/measures.txt"
+# Run, for what the feature costs in instructions: a rigid scene's classification (the paper
+# stream, `noise_colour_insns_classify_added`, the fits' bookkeeping for weights it never
+# takes) and the chain scene's build (`noise_colour_insns_chain_scene_build_added`, the
+# colour's pass).
+if fw/run.sh "$elf" > "$out/node-nocolour.txt"; then
+    sed -n -e 's/^measure \(insns_classify_max\|insns_chain_scene_build\) \([0-9]*\)$/nocolour_\1 \2/p' \
+        "$out/node-nocolour.txt" | tee -a "$out/measures.txt"
+else
+    echo "node (without noise_colour) FAILED; its output:"
+    cat "$out/node-nocolour.txt"
+    status=1
+fi
+# What the plasticity, settle and noise_colour features add: differences of the builds above.
 python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
 import sys
 m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
@@ -251,6 +276,10 @@ for key, a, b in [
      "reference_node_flash_bytes"),
     ("plasticity_kernel_ram_added_bytes", "plasticity_kernel_ram_bytes", "kernel_ram_bytes"),
     ("settle_flash_added_bytes", "flash_code_bytes", "nosettle_flash_code_bytes"),
+    ("noise_colour_flash_added_bytes", "flash_code_bytes", "nocolour_flash_code_bytes"),
+    ("noise_colour_insns_classify_added", "insns_classify_max", "nocolour_insns_classify_max"),
+    ("noise_colour_insns_chain_scene_build_added", "insns_chain_scene_build",
+     "nocolour_insns_chain_scene_build"),
 ]:
     if a in m and b in m:
         print(f"{key} {int(m[a]) - int(m[b])}")

@@ -74,7 +74,10 @@
 //!   noise about 30 % smaller); below, `z = F^(2/3) = F_max^(2/3) sin(pi t / t_c)` as a
 //!   sinusoid of known frequency through the largest sample and its larger neighbour,
 //!   `F_max` and `t_c` iterated three times. The fit reports its noise gain and what noise it
-//!   shares with the area, and the noise model carries both.
+//!   shares with the area, and the noise model carries both. Behind a chain the equalised
+//!   noise is coloured: the gains are then the fit's weights' quadratic form in the noise's
+//!   correlations ([`crate::noise_colour`]), and the area's variance that of the sum of its
+//!   correlated samples.
 //! - A short damped pulse (feature `pulse_shape`; on a rigid chain, below
 //!   [`crate::short_pulse::SHORT_SAMPLES`] samples as the fit through the top measures it):
 //!   the contact's own tabulated shape fitted to the five samples about the largest
@@ -91,6 +94,8 @@
 use crate::classifier::{Measurement, RejectReason};
 use crate::equaliser::Pairs;
 use crate::math::{Backend, DefaultBackend};
+#[cfg(feature = "noise_colour")]
+use crate::noise_colour::NoiseColour;
 #[cfg(feature = "pulse_shape")]
 use crate::pulse_shape::{PulseShape, shape_flank_fit};
 use crate::scene::{ContactCalibration, Scene};
@@ -570,6 +575,10 @@ pub struct Detector<M: Backend = DefaultBackend> {
     /// A clipped pulse waiting for the re-estimation after it.
     #[cfg(all(feature = "pulse_shape", feature = "settle"))]
     pending: Option<PendingClip>,
+    /// The equalised noise's correlation between samples (`None`: white, behind a rigid
+    /// chain).
+    #[cfg(feature = "noise_colour")]
+    colour: Option<NoiseColour>,
     dt_s: f32,
     force_per_count_n: f32,
     baseline: f32,
@@ -665,6 +674,8 @@ impl<M: Backend> Detector<M> {
                 / mode_gain,
             #[cfg(all(feature = "pulse_shape", feature = "settle"))]
             pending: None,
+            #[cfg(feature = "noise_colour")]
+            colour: (!scene.equaliser().is_identity()).then(|| *scene.equaliser().noise_colour()),
             dt_s: 1.0 / fs,
             force_per_count_n: sensor.force_per_count_n,
             baseline: 0.0,
@@ -1286,6 +1297,7 @@ impl<M: Backend> Detector<M> {
             duration,
             gain2,
             weight_sum,
+            ..
         }) = self.fit_top()
         else {
             return reject(RejectReason::Implausible);
@@ -1410,21 +1422,59 @@ impl<M: Backend> Detector<M> {
         let p = &self.pulse;
         let [before2, before] = p.before_max;
         let [after, after2] = p.after_max;
-        if self.smooth > 1 {
+        let samples = p.samples as f32;
+        let fit = if self.smooth > 1 {
             smooth_fit(p.top_smooth, self.smooth, p.sum).map(|(peak, duration)| PeakFit {
                 peak,
                 duration,
                 gain2: 1.0 / self.smooth as f32,
                 weight_sum: 1.0,
-            })
+                #[cfg(feature = "noise_colour")]
+                basis: crate::shape_fit::WeightBasis::Largest,
+            })?
         } else {
             peak_fit::<M>(
                 [before2, before, p.max, after, after2],
                 p.sum,
-                p.samples as f32,
+                samples,
                 self.hertz,
-            )
+            )?
+        };
+        #[cfg(feature = "noise_colour")]
+        let fit = {
+            let mut fit = fit;
+            if let Some(colour) = &self.colour {
+                self.colour_gains(colour, &mut fit, samples);
+            }
+            fit
+        };
+        Some(fit)
+    }
+
+    /// `V(n)`: the variance of the sum of `n` consecutive equalised samples over one sample's
+    /// (`n` for white noise, [`crate::noise_colour::NoiseColour::sum_variance`] behind a chain).
+    fn sum_variance(&self, n: f32) -> f32 {
+        #[cfg(feature = "noise_colour")]
+        if let Some(colour) = &self.colour {
+            return colour.sum_variance(n);
         }
+        n
+    }
+
+    /// Behind a chain the samples are correlated: `fit`'s noise gains become its weights'
+    /// quadratic form in the noise's correlations `colour`, and their covariance with the sum
+    /// of its `samples` (for the mean of `smooth` samples, `V(smooth) / smooth^2` and the middle
+    /// sample's row; see [`NoiseColour`]).
+    #[cfg(feature = "noise_colour")]
+    #[inline(never)]
+    fn colour_gains(&self, colour: &NoiseColour, fit: &mut PeakFit, samples: f32) {
+        (fit.gain2, fit.weight_sum) = if self.smooth > 1 {
+            let w = self.smooth as f32;
+            (colour.sum_variance(w) / (w * w), colour.middle_row(samples))
+        } else {
+            let (top, per_sample) = fit.weights();
+            colour.weighted(&top, per_sample, samples)
+        };
     }
 
     /// Why a fitted top of `peak` counts and `duration` samples is not a pulse's: a flat
@@ -1469,7 +1519,7 @@ impl<M: Backend> Detector<M> {
         // samples' worth of it with the pulse's sum: `cov(ln sum, ln F_max) = noise^2
         // weight_sum / (sum F_max)`.
         let noise_force = self.noise * M::sqrt(gain2) / peak;
-        let sigma_area = self.noise * M::sqrt(n) / p.sum;
+        let sigma_area = self.noise * M::sqrt(self.sum_variance(n)) / p.sum;
         let shared = self.noise * self.noise * weight_sum / (p.sum * peak);
         // The shape check's allowance for the ringing seen before the pulse: its amplitude
         // (`sqrt 2` RMS, and a half more) on the peak and on all `n` samples of the sum.

@@ -57,6 +57,8 @@ use crate::complex::{C, cis};
 use crate::error::Error;
 pub use crate::error::{ChainFault, ChainStage};
 use crate::math::Backend;
+#[cfg(feature = "noise_colour")]
+use crate::noise_colour::{ColourSums, NoiseColour};
 use crate::sampled::SampledCalibration;
 
 /// Most beam modes a chain can carry.
@@ -71,8 +73,9 @@ pub(crate) const SECTION_STATES: usize = 2 * MAX_MODES;
 /// beam mode.
 pub type SectionStates = [[f32; 2]; MAX_MODES];
 
-/// Length of the impulse response summed at build for the noise gain (samples).
-const NOISE_TAPS: usize = 2048;
+/// Samples of the step response summed at build for the noise gain and colour: 2048, and
+/// 128 more so that the colour's widest sum (128 samples) spans the same response.
+const NOISE_TAPS: usize = 2048 + 128;
 
 /// Aberth iterations at most (each one `O(modes^2)`); they converge in 10-30.
 const ROOT_ITERATIONS: usize = 200;
@@ -379,6 +382,8 @@ pub struct EqualiserDesign {
     gain: f32,
     taps: Option<Taps>,
     noise_gain: f32,
+    #[cfg(feature = "noise_colour")]
+    colour: NoiseColour,
 }
 
 /// The accelerometer's FIR: `out_(n - delay) = sum_k c_k y_(n - k)` (the taps times the
@@ -398,6 +403,8 @@ impl EqualiserDesign {
         gain: 1.0,
         taps: None,
         noise_gain: 1.0,
+        #[cfg(feature = "noise_colour")]
+        colour: NoiseColour::WHITE,
     };
 
     /// Designs the equaliser of `dynamics` at `sample_rate_hz`; refuses a stage that cannot be
@@ -438,7 +445,7 @@ impl EqualiserDesign {
             t.c = t.c.map(|c| c * design.gain);
             t
         });
-        design.noise_gain = M::sqrt(design.impulse_energy().max(0.0));
+        design.noise_moments::<M>();
         Ok(design)
     }
 
@@ -448,9 +455,16 @@ impl EqualiserDesign {
     }
 
     /// RMS of the equalised signal for unit white noise at the ADC:
-    /// `sqrt(sum_n h_n^2)` over the first 2048 samples of the impulse response.
+    /// `sqrt(sum_n h_n^2)` over the first 2176 samples of the impulse response.
     pub fn noise_gain(&self) -> f32 {
         self.noise_gain
+    }
+
+    /// How the equaliser correlates white noise between samples ([`NoiseColour::WHITE`] for a
+    /// rigid chain).
+    #[cfg(feature = "noise_colour")]
+    pub fn noise_colour(&self) -> &NoiseColour {
+        &self.colour
     }
 
     /// Samples by which the equalised signal lags the input: 1 with an accelerometer stage.
@@ -508,17 +522,29 @@ impl EqualiserDesign {
         h
     }
 
-    /// `sum h_n^2` of the impulse response (first [`NOISE_TAPS`] samples), from an impulse of
-    /// `2^14` counts after a reference sample of 0, one [`Equaliser::step`] at a time (so that
-    /// the image carries no other copy of the filter loop).
-    fn impulse_energy(&self) -> f32 {
+    /// Sets the noise gain `sqrt(sum h^2)` of the impulse response `h` (and, with
+    /// `noise_colour`, how it correlates the noise between samples), from the step response
+    /// `s` of an input of `2^14` counts after a reference sample of 0, one [`Equaliser::step`]
+    /// at a time (so that the image carries no other copy of the filter loop), over
+    /// [`NOISE_TAPS`] samples: `h_m = s_m - s_(m-1)`.
+    fn noise_moments<M: Backend>(&mut self) {
         let mut eq = Equaliser::new(self);
-        let mut sum = 0.0f32;
-        for n in 0..NOISE_TAPS {
-            let v = eq.step(if n == 1 { 1 << 14 } else { 0 });
-            sum += v * v;
+        let _ = eq.step(0);
+        #[cfg(feature = "noise_colour")]
+        let mut sums = ColourSums::new();
+        let (mut energy, mut last) = (0.0f32, 0.0f32);
+        for _ in 0..NOISE_TAPS {
+            let s = eq.step(1 << 14) / 16384.0;
+            energy += (s - last) * (s - last);
+            #[cfg(feature = "noise_colour")]
+            sums.push(s);
+            last = s;
         }
-        sum / (16384.0 * 16384.0)
+        self.noise_gain = M::sqrt(energy.max(0.0));
+        #[cfg(feature = "noise_colour")]
+        {
+            self.colour = sums.colour(energy, last);
+        }
     }
 }
 

@@ -24,6 +24,8 @@ pub mod hertz;
 pub mod material;
 pub mod math;
 pub mod monitor;
+#[cfg(feature = "noise_colour")]
+pub mod noise_colour;
 #[cfg(feature = "pulse_shape")]
 pub mod pulse_shape;
 pub mod ratio_map;

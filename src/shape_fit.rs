@@ -73,6 +73,53 @@ pub struct PeakFit {
     /// Sum of the peak's weights over the samples, `sum_k dF_max / dy_k`: the peak shares
     /// `sigma^2 weight_sum` of covariance with the pulse's sum.
     pub weight_sum: f32,
+    /// What [`PeakFit::weights`] computes the peak's weights from.
+    #[cfg(feature = "noise_colour")]
+    pub(crate) basis: WeightBasis,
+}
+
+/// What a [`PeakFit`]'s weights `dF_max / dy_k` come from, kept by the fit so that only a
+/// detector behind a chain computes them ([`PeakFit::weights`]).
+#[cfg(feature = "noise_colour")]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum WeightBasis {
+    /// The largest sample alone carries the peak.
+    Largest,
+    /// The three samples' closed form ([`peak_fit`]): `a = dln F_max / d(ln y_0, ln y_1, ln
+    /// sum)`, the largest sample `y0`, its larger neighbour `y1` at index `at1` of the five
+    /// about the largest, and the pulse's `sum`.
+    Three {
+        a: [f32; 3],
+        y0: f32,
+        y1: f32,
+        sum: f32,
+        at1: usize,
+    },
+    /// The five samples' fit, whose last step was taken from `p = [F_max, k_peak, d]`.
+    Five([f32; 3]),
+}
+
+#[cfg(feature = "noise_colour")]
+impl PeakFit {
+    /// The peak's weights `dF_max / dy_k`: on the five samples about the largest
+    /// (`[y_-2, .., y_2]`), and on every sample of the pulse's sum (through the duration the
+    /// three samples' fit takes from it; 0 for the five samples' fit, whose weights are
+    /// `[N^-1 J^T]_(0 k)` of its last step's normal equations). What coloured noise needs
+    /// ([`crate::noise_colour::NoiseColour::weighted`]); white noise needs only `gain2` and
+    /// `weight_sum` (`sum_k w_k^2` and `sum_k w_k`).
+    pub fn weights(&self) -> ([f32; 5], f32) {
+        match self.basis {
+            WeightBasis::Largest => ([0.0, 0.0, 1.0, 0.0, 0.0], 0.0),
+            WeightBasis::Three {
+                a,
+                y0,
+                y1,
+                sum,
+                at1,
+            } => three_point_weights(a, self.peak, y0, y1, sum, at1),
+            WeightBasis::Five(p) => (five_point_weights(p), 0.0),
+        }
+    }
 }
 
 /// The five samples of `y` about index `i`, `[y_(i-2), .., y_(i+2)]`, 0 where `y` has none:
@@ -124,6 +171,8 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
         duration: sum / (C_AREA * y0),
         gain2: 1.0,
         weight_sum: 1.0,
+        #[cfg(feature = "noise_colour")]
+        basis: WeightBasis::Largest,
     };
     let (y1, z1) = if zb > za { (after, zb) } else { (before, za) };
     // `dln F_max / d(ln y_0, ln y_1, ln sum)` of the iterate, from `F_max = y_0`; each step's
@@ -146,14 +195,32 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
         fit.duration = sum / (C_AREA * fit.peak);
     }
     (fit.gain2, fit.weight_sum) = three_point_gains(a, fit.peak, y0, y1.min(y0), sum, samples);
+    #[cfg(feature = "noise_colour")]
+    {
+        let at1 = if zb > za { 3 } else { 1 };
+        let (y1, y0) = (y1.min(y0), y0);
+        fit.basis = WeightBasis::Three {
+            a,
+            y0,
+            y1,
+            sum,
+            at1,
+        };
+    }
     let d = step(fit.duration);
     if five && d <= FIVE_POINT_STEP {
         let mut p = [fit.peak, 0.0, d];
         for _ in 0..2 {
+            #[cfg(feature = "noise_colour")]
+            let from = p;
             let Some(gains) = five_point(&top, &mut p, d) else {
                 break;
             };
             (fit.peak, fit.gain2, fit.weight_sum) = (p[0], gains.0, gains.1);
+            #[cfg(feature = "noise_colour")]
+            {
+                fit.basis = WeightBasis::Five(from);
+            }
         }
         fit.duration = sum / (C_AREA * fit.peak);
     }
@@ -233,12 +300,39 @@ fn three_point_gains(a: [f32; 3], f: f32, y0: f32, y1: f32, sum: f32, samples: f
     }
 }
 
+/// The three samples' peak `f`'s weights as [`PeakFit`] holds them, from the same `a`, `y0`,
+/// `y1` and `sum` as [`three_point_gains`]: `f a_0 / y_0` on the largest sample (index 2),
+/// `f a_1 / y_1` on its larger neighbour (index `at1`), and `f a_s / sum` on every sample.
+#[cfg(feature = "noise_colour")]
+fn three_point_weights(
+    a: [f32; 3],
+    f: f32,
+    y0: f32,
+    y1: f32,
+    sum: f32,
+    at1: usize,
+) -> ([f32; 5], f32) {
+    let mut top = [0.0f32; 5];
+    if let Some(w) = top.get_mut(2) {
+        *w = f * a[0] / y0;
+    }
+    if let (Some(w), true) = (top.get_mut(at1), y1 > 0.0) {
+        *w = f * a[1] / y1;
+    }
+    let per = f * a[2] / sum;
+    if top.iter().all(|w| w.is_finite()) && per.is_finite() {
+        (top, per)
+    } else {
+        ([0.0, 0.0, 1.0, 0.0, 0.0], 0.0)
+    }
+}
+
 /// One Gauss-Newton step of the five-sample fit of `F_max g(d (k - k_peak))` in
 /// `p = [F_max, k_peak, d]` (updated in place; `k_peak` kept within one sample of the largest,
 /// `d` within a factor 1.25 of `d_area`, the area's): `(gain2, weight_sum)` of the step's
 /// normal equations, `None` when they are singular or the peak leaves the positive.
 fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32)> {
-    let ([peak, offset, d], inv, c) = gauss_newton(&[-2.0, -1.0, 0.0, 1.0, 2.0], top, *p)?;
+    let ([peak, offset, d], inv, c) = gauss_newton(&FIVE_KS, top, *p, &mut [])?;
     if peak.is_nan() || peak <= 0.0 {
         return None;
     }
@@ -251,19 +345,43 @@ fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32
     Some((w0, w0 * c[0] + w1 * c[1] + w2 * c[2]))
 }
 
+/// The five samples' offsets from the largest.
+const FIVE_KS: [f32; 5] = [-2.0, -1.0, 0.0, 1.0, 2.0];
+
+/// The weights `dF_max / dy_k = [N^-1 J^T]_(0 k)` of the five samples' Gauss-Newton step
+/// from `p = [F_max, k_peak, d]` ([`five_point`]; the rows `J_k` and `N = J^T J` do not
+/// depend on the samples); zeros where `N` is singular. Their squares sum to `[N^-1]_00`, the
+/// step's `gain2`.
+#[cfg(feature = "noise_colour")]
+fn five_point_weights(p: [f32; 3]) -> [f32; 5] {
+    let mut rows = [[0.0f32; 3]; 5];
+    let Some((_, inv, _)) = gauss_newton(&FIVE_KS, &[0.0; 5], p, &mut rows) else {
+        return [0.0; 5];
+    };
+    let [w0, w1, w2] = inv[0];
+    rows.map(|[j1, j2, j3]| w0 * j1 + w1 * j2 + w2 * j3)
+}
+
 /// One Gauss-Newton step of the least-squares fit of `F_max g(d (k - k_peak))`
 /// ([`peak_shape`]) to the samples `ys` at `ks` (samples), from `p = [F_max, k_peak, d]`, as
 /// [`five_point`] and [`flank_step`] take it: the new parameters `p + N^-1 b` (not yet kept
 /// in their ranges), the inverse `N^-1` of the normal equations and the column sums `c` (see
-/// [`normal_equations`]); `None` when `N` is singular.
+/// [`normal_equations`]), the model's gradient at each sample written to `rows` (as many as
+/// it holds); `None` when `N` is singular.
 #[inline(never)]
-fn gauss_newton(ks: &[f32], ys: &[f32], p: [f32; 3]) -> Option<([f32; 3], Matrix3, [f32; 3])> {
-    gauss_newton_of(ks, ys, p, peak_shape, &[])
+fn gauss_newton(
+    ks: &[f32],
+    ys: &[f32],
+    p: [f32; 3],
+    rows: &mut [[f32; 3]],
+) -> Option<([f32; 3], Matrix3, [f32; 3])> {
+    damped_step(p, &normal_equations(ks, ys, p, peak_shape, rows), 0.0)
 }
 
 /// [`gauss_newton`] with the template `shape(x) = (g, dg/dx)` in place of [`peak_shape`], and
 /// rows beside the samples', each `[dm/dF_max, dm/dk_peak, dm/dd, y - m]` (weighted against
 /// one sample as the caller needs; zeros add nothing).
+#[cfg(feature = "pulse_shape")]
 pub(crate) fn gauss_newton_of(
     ks: &[f32],
     ys: &[f32],
@@ -285,6 +403,7 @@ const MARQUARDT_DAMPING: f32 = 0.03;
 
 /// The normal equations `(N, b, c)` of [`normal_equations`] over the samples `ys` at `ks`,
 /// with the `extra` rows ([`gauss_newton_of`]) added to `N` and `b`.
+#[cfg(feature = "pulse_shape")]
 fn all_normal_equations(
     ks: &[f32],
     ys: &[f32],
@@ -292,7 +411,7 @@ fn all_normal_equations(
     shape: impl Fn(f32) -> (f32, f32),
     extra: &[[f32; 4]],
 ) -> ([f32; 6], [f32; 3], [f32; 3]) {
-    let (mut n, mut b, c) = normal_equations(ks, ys, p, shape);
+    let (mut n, mut b, c) = normal_equations(ks, ys, p, shape, &mut []);
     for &[e1, e2, e3, r] in extra {
         add_row(&mut n, &mut b, [e1, e2, e3], r);
     }
@@ -396,21 +515,25 @@ pub(crate) fn descend<const R: usize>(
 /// `crate::pulse_shape::shape_flank_fit`) at
 /// `p = [F_max, k_peak, d]` over the samples `ys` at `ks` (samples; `t = k - k_peak`):
 /// `[n11, n12, n13, n22, n23, n33]`, the right side `b` and the column sums `c` of the
-/// columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'` and `dm/dd = F_max t g'`.
+/// columns `dm/dF_max = g`, `dm/dk_peak = -F_max d g'` and `dm/dd = F_max t g'`. The first
+/// rows `[g, -F_max d g', F_max t g']` are also written to `rows`, as many as it holds.
 fn normal_equations(
     ks: &[f32],
     ys: &[f32],
-    p: [f32; 3],
+    [peak, at, d]: [f32; 3],
     shape: impl Fn(f32) -> (f32, f32),
+    rows: &mut [[f32; 3]],
 ) -> ([f32; 6], [f32; 3], [f32; 3]) {
-    let [peak, at, d] = p;
     let (mut n, mut b, mut c) = ([0.0f32; 6], [0.0f32; 3], [0.0f32; 3]);
-    for (&k, &y) in ks.iter().zip(ys) {
+    for (i, (&k, &y)) in ks.iter().zip(ys).enumerate() {
         let t = k - at;
         let (g, slope) = shape(d * t);
         let (j1, j2, j3) = (g, -peak * d * slope, peak * t * slope);
         add_row(&mut n, &mut b, [j1, j2, j3], y - peak * g);
         c = [c[0] + j1, c[1] + j2, c[2] + j3];
+        if let Some(row) = rows.get_mut(i) {
+            *row = [j1, j2, j3];
+        }
     }
     (n, b, c)
 }
@@ -650,7 +773,7 @@ fn flank_step(
     (d_lo, d_hi): (f32, f32),
     middle: f32,
 ) -> Option<Matrix3> {
-    let ([peak, at, d], inv, _) = gauss_newton(ks, ys, *p)?;
+    let ([peak, at, d], inv, _) = gauss_newton(ks, ys, *p, &mut [])?;
     *p = [
         peak.max(0.5 * p[0]),
         at.max(middle - 1.0).min(middle + 1.0),

@@ -162,6 +162,55 @@ fn noise_gain_is_the_impulse_energy() {
     assert!(rel.abs() < 0.02, "{rel}");
 }
 
+/// The noise's colour against the autocorrelation of 2^17 samples of the impulse response
+/// (f64): the correlations at lags 1-4 and the variance of sums of 2-128 consecutive samples,
+/// `V(w) = sum_(|k| < w) (w - |k|) rho_k`, for chains that colour the noise three ways (an
+/// accelerometer's inverse, beam modes alone, both).
+#[cfg(feature = "noise_colour")]
+#[test]
+fn noise_colour_is_the_impulse_responses_autocorrelation() {
+    let beam = [mode(180.0, 0.02, 0.1), mode(2100.0, 0.02, 0.1)];
+    for (modes, acc) in [
+        (&beam[..], Some((40_000.0, 0.05))),
+        (&beam[..], None),
+        (&[][..], Some((30_000.0, 0.6))),
+    ] {
+        let design =
+            EqualiserDesign::new::<coalshock::math::Libm>(&dynamics(modes, acc), FS).unwrap();
+        let colour = design.noise_colour();
+        let h = impulse_response(&design, 1 << 17);
+        let r0: f64 = h.iter().map(|v| v * v).sum();
+        let rho: Vec<f64> = (0..=128)
+            .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum::<f64>() / r0)
+            .collect();
+        for (k, &real) in rho.iter().enumerate().take(5).skip(1) {
+            let stated = colour.rho(k) as f64;
+            println!(
+                "{} modes, acc {acc:?}: rho_{k} {stated:+.4} against {real:+.4}",
+                modes.len()
+            );
+            assert!(
+                (stated - real).abs() < 0.005,
+                "rho_{k}: {stated} against {real}"
+            );
+        }
+        for w in [2usize, 5, 8, 16, 32, 64, 128] {
+            let real: f64 = w as f64 + 2.0 * (1..w).map(|k| (w - k) as f64 * rho[k]).sum::<f64>();
+            let stated = colour.sum_variance(w as f32) as f64;
+            println!("  V({w}) {stated:.3} against {real:.3}");
+            // The kernel sums 2048 + 128 samples of the response: a 180 Hz mode rings past
+            // them at 100 kS/s, which the longer sums feel (5 % of V(128)).
+            let tolerance = if w <= 8 { 0.01 } else { 0.06 };
+            assert!(
+                (stated / real - 1.0).abs() < tolerance,
+                "V({w}): {stated} against {real}"
+            );
+        }
+    }
+    let rigid = EqualiserDesign::new::<coalshock::math::Libm>(&ChainDynamics::RIGID, FS).unwrap();
+    assert!(rigid.noise_colour().is_white());
+}
+
 fn refused(d: ChainDynamics) -> Error {
     SensorChain::from_plate(FS, 500.0, 100.0, 4.0, 16)
         .with_dynamics(d)

@@ -586,3 +586,48 @@ fn three_sample_noise_gains_match_monte_carlo() {
     );
     assert!(worst_unit_gain > 0.15);
 }
+
+/// The fits' weights `dF_max / dy_k` (`PeakFit::weights`, what the detector takes behind a
+/// chain) give the fits' own white-noise gains: `sum_k w_k^2 = gain2` and `sum_k w_k =
+/// weight_sum` (`NoiseColour::WHITE.weighted`), for the three samples' closed form (whose
+/// gains come from its derivatives) and the five samples' least squares (`[N^-1]_00` and
+/// `N^-1`'s first row times the column sums), over 2.5-10 samples per pulse and eight
+/// sampling phases.
+#[cfg(feature = "noise_colour")]
+#[test]
+fn fit_weights_give_the_white_noise_gains() {
+    use coalshock::noise_colour::NoiseColour;
+    use coalshock::shape_fit::peak_fit;
+    let mut checked = [0usize; 2];
+    for spp in [2.5, 4.0, 6.0, 8.0, 10.0] {
+        for phase in 0..8 {
+            let start = phase as f64 / 8.0;
+            let y: Vec<f32> = (0..)
+                .map(|k| (k as f64 + start) / spp)
+                .take_while(|&x| x <= 1.0)
+                .map(|x| (common::hertz_shape(x) * 1e4) as f32)
+                .collect();
+            let i = (0..y.len()).max_by(|&a, &b| y[a].total_cmp(&y[b])).unwrap();
+            let sum: f32 = y.iter().sum();
+            for five in [false, true] {
+                let fit = peak_fit::<DefaultBackend>(five_about(&y, i), sum, y.len() as f32, five)
+                    .unwrap();
+                let (top, per_sample) = fit.weights();
+                let (gain2, weight_sum) =
+                    NoiseColour::WHITE.weighted(&top, per_sample, y.len() as f32);
+                let close = |a: f32, b: f32| (a - b).abs() <= 1e-3 * b.abs().max(1.0);
+                assert!(
+                    close(gain2, fit.gain2) && close(weight_sum, fit.weight_sum),
+                    "{spp} samples, phase {phase}, five {five}: ({gain2}, {weight_sum}) \
+                     against ({}, {})",
+                    fit.gain2,
+                    fit.weight_sum
+                );
+                // The five samples' fit leaves the sum's samples no weight.
+                checked[usize::from(per_sample == 0.0)] += 1;
+            }
+        }
+    }
+    // Both fits were taken: the five samples' where the pulse is long enough for it.
+    assert!(checked[0] > 0 && checked[1] > 0, "{checked:?}");
+}

@@ -44,3 +44,18 @@ fn a_flow_monitor_takes_204_bytes() {
     assert_eq!(core::mem::size_of::<FlowMonitor<Libm>>(), 204);
     assert_eq!(core::mem::size_of::<FlowMonitor<Micromath>>(), 204);
 }
+
+/// `noise_colour`: a `NoiseColour` of 15 `f32` (the sums' variances at 9 widths, the slope
+/// past them and 5 correlations), 60 B in each copy of an `EqualiserDesign` (the scene's, the
+/// chain's own and the monitor's equaliser's) and 64 B as the detector's `Option`.
+#[cfg(feature = "noise_colour")]
+#[test]
+fn a_noise_colour_takes_60_bytes() {
+    use coalshock::noise_colour::{LAGS, NoiseColour, WIDTHS};
+    assert_eq!(
+        (WIDTHS.len() + 1 + LAGS + 1) * core::mem::size_of::<f32>(),
+        60
+    );
+    assert_eq!(core::mem::size_of::<NoiseColour>(), 60);
+    assert_eq!(core::mem::size_of::<Option<NoiseColour>>(), 64);
+}
