@@ -136,7 +136,8 @@ impl NoiseColour {
     }
 
     /// The covariance of a sample in the middle of `w` consecutive samples with their sum, over
-    /// one sample's variance: `1 + 2 sum_(k <= h) rho_k = V(h+1) - V(h)` with `h = (w - 1) / 2`.
+    /// one sample's variance: `1 + 2 sum_(1 <= k <= h) rho_k = V(h+1) - V(h)` with
+    /// `h = (w - 1) / 2`.
     ///
     /// ```
     /// use coalshock::noise_colour::{NoiseColour, WIDTHS};
