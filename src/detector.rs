@@ -66,8 +66,10 @@
 //! - Ringing seen before a pulse (behind a chain that is off) goes on through it: its
 //!   variance, at the chain's mode that moves `ln t_c` most, and its covariance joins the
 //!   measurement's (`Detector::ring_noise`).
-//! - Peak between samples ([`peak_fit`]): for the undamped Hertz contact (a scene without a
-//!   contact calibration) from 8 samples per pulse, the least-squares fit of
+//! - Peak between samples ([`peak_fit`]): for a scene whose pulses have one shape (the Hertz
+//!   law, or a restitution-parametrised damped law, whose difference from the Hertz shape
+//!   its sampling correction measures with the same fit; not a yielding contact or one whose
+//!   ratios a table bends) from 8 samples per pulse, the least-squares fit of
 //!   the Hertz pulse's shape about its top to the five samples about the largest, in the
 //!   peak, its time and its width (the largest of single noisy samples is biased high by
 //!   the noise, +0.009 in `ln F_max` at 40 counts RMS; the fit's bias is second order, and its
@@ -520,9 +522,12 @@ pub struct Detector<M: Backend = DefaultBackend> {
     #[cfg(feature = "plasticity")]
     flat_top_ratio: f32,
     spike_fraction: f32,
-    /// The contact is the undamped Hertz law (no calibration): its pulses are read with the
-    /// Hertz shape through five samples, and a clipped one from its flanks.
+    /// The contact is the undamped Hertz law (no calibration): a clipped pulse is read from
+    /// its flanks by the Hertz series.
     hertz: bool,
+    /// Every pulse of the scene has one shape ([`one_shape`]): its top is read with the Hertz
+    /// shape through five samples ([`peak_fit`]'s `five`).
+    five: bool,
     /// The scene carries a sampling correction ([`crate::Settings::corrects_sampling`]) whose
     /// spread states the fit's error at few samples per pulse: a measurement then
     /// states its sigmas without the fit's generic bound ([`Detector::stated_sigmas`]).
@@ -616,6 +621,7 @@ impl<M: Backend> Detector<M> {
         let rigid = scene.equaliser().is_identity();
         let (ring_weight, ring_decay) = Self::ring_weights(rigid, fs);
         let hertz = s.contact == ContactCalibration::HERTZ && plain_top(s);
+        let five = one_shape(scene);
         #[cfg(feature = "pulse_shape")]
         let clip_lag = sensor.dynamics.accelerometer().map_or(0.0, |a| {
             a.damping_ratio * fs / (core::f32::consts::PI * a.frequency_hz)
@@ -642,6 +648,7 @@ impl<M: Backend> Detector<M> {
             flat_top_ratio: s.flat_top_ratio,
             spike_fraction: s.spike_fraction,
             hertz,
+            five,
             sampling_calibrated: s.corrects_sampling(),
             #[cfg(feature = "pulse_shape")]
             clip_errors: clip_errors(scene, clip_lag, pulse_shape.is_some()),
@@ -1437,7 +1444,7 @@ impl<M: Backend> Detector<M> {
                 [before2, before, p.max, after, after2],
                 p.sum,
                 samples,
-                self.hertz,
+                self.five,
             )?
         };
         #[cfg(feature = "noise_colour")]
@@ -1985,6 +1992,22 @@ fn clip_shape(s: &crate::scene::Settings, readable: bool) -> PulseShape {
         (true, true) => PulseShape::hertz(),
         (true, false) => s.pulse_shape,
     }
+}
+
+/// Whether every pulse of `scene` has one shape, scaled in force and time: no class yields
+/// (its top broadens with speed) and none carries a ratio map (a damped law whose ratios,
+/// and so its shape, change with size and speed). The Hertz law and a restitution-parametrised
+/// law (Hunt-Crossley, Lankarani-Nikravesh, Flores, Gonthier, Tsuji) are such. The five
+/// samples' fit with the Hertz shape then reads a damped contact's top with an error that
+/// depends only on the samples per pulse and the phase, which the scene's sampling
+/// correction measures with the same fit; a fit through three samples would leave the peak
+/// to the largest sample's noise.
+fn one_shape<const N: usize, M: Backend>(scene: &Scene<N, M>) -> bool {
+    #[cfg(feature = "ratio_map")]
+    if scene.envelopes().iter().any(|e| e.ratio_map.is_some()) {
+        return false;
+    }
+    plain_top(scene.settings())
 }
 
 /// No yield: the pulse's top is the Hertz pulse's (always, without the feature `plasticity`).

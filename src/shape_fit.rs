@@ -78,23 +78,16 @@ pub struct PeakFit {
     pub(crate) basis: WeightBasis,
 }
 
-/// What a [`PeakFit`]'s weights `dF_max / dy_k` come from, kept by the fit so that only a
-/// detector behind a chain computes them ([`PeakFit::weights`]).
+/// What a [`PeakFit`]'s weights `dF_max / dy_k` come from ([`PeakFit::weights`]): the three
+/// samples' weights themselves (their white-noise gains are taken from them), or the point of
+/// the five samples' last step, from which only a detector behind a chain computes them.
 #[cfg(feature = "noise_colour")]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum WeightBasis {
     /// The largest sample alone carries the peak.
     Largest,
-    /// The three samples' closed form ([`peak_fit`]): `a = dln F_max / d(ln y_0, ln y_1, ln
-    /// sum)`, the largest sample `y0`, its larger neighbour `y1` at index `at1` of the five
-    /// about the largest, and the pulse's `sum`.
-    Three {
-        a: [f32; 3],
-        y0: f32,
-        y1: f32,
-        sum: f32,
-        at1: usize,
-    },
+    /// The three samples' closed form ([`peak_fit`]): the weights its white-noise gains took.
+    Three(ThreeWeights),
     /// The five samples' fit, whose last step was taken from `p = [F_max, k_peak, d]`.
     Five([f32; 3]),
 }
@@ -110,13 +103,7 @@ impl PeakFit {
     pub fn weights(&self) -> ([f32; 5], f32) {
         match self.basis {
             WeightBasis::Largest => ([0.0, 0.0, 1.0, 0.0, 0.0], 0.0),
-            WeightBasis::Three {
-                a,
-                y0,
-                y1,
-                sum,
-                at1,
-            } => three_point_weights(a, self.peak, y0, y1, sum, at1),
+            WeightBasis::Three(w) => w.on_five(),
             WeightBasis::Five(p) => (five_point_weights(p), 0.0),
         }
     }
@@ -145,8 +132,10 @@ pub fn shape_fit<M: Backend>(top: [f32; 5], sum: f32, five: bool) -> Option<(f32
 /// The fit behind [`shape_fit`], with its noise gains. `F_max` and `t_c = sum / (C_AREA
 /// F_max)` are iterated three times; with the phase step `d = PEAK_OMEGA / t_c` per sample:
 ///
-/// - `five` (the contact is the undamped Hertz law, whose shape the fit takes; a damped or
-///   yielding contact's pulse is not that shape, and its calibration reads it as below) and
+/// - `five` (every pulse of the scene has one shape: the Hertz law's, whose shape the fit
+///   takes, or a restitution-parametrised damped law's, whose difference from it the scene's
+///   sampling correction measures with this same fit; a yielding top, or a damped law whose
+///   shape changes with size and speed, is read as below) and
 ///   `d <= FIVE_POINT_STEP` (7.8 samples per pulse or more): Gauss-Newton steps of the
 ///   least-squares fit of `F_max g(d (k - k_peak))` ([`peak_shape`]) to the five samples, in
 ///   `F_max`, the offset `k_peak` and the phase step `d` (two Gauss-Newton steps from the
@@ -174,7 +163,13 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
         #[cfg(feature = "noise_colour")]
         basis: WeightBasis::Largest,
     };
-    let (y1, z1) = if zb > za { (after, zb) } else { (before, za) };
+    // The larger neighbour, its index among the five, and its sample (no larger than `y0`).
+    let (at1, y1, z1) = if zb > za {
+        (3, after, zb)
+    } else {
+        (1, before, za)
+    };
+    let y1 = y1.min(y0);
     // `dln F_max / d(ln y_0, ln y_1, ln sum)` of the iterate, from `F_max = y_0`; each step's
     // `d = PEAK_OMEGA C_AREA F_max / sum` (until it is held at pi) carries the last one's.
     let mut a = [1.0, 0.0, 0.0];
@@ -194,18 +189,11 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
         fit.peak = top3.peak;
         fit.duration = sum / (C_AREA * fit.peak);
     }
-    (fit.gain2, fit.weight_sum) = three_point_gains(a, fit.peak, y0, y1.min(y0), sum, samples);
+    let weights = ThreeWeights::new(a, fit.peak, (y0, y1, at1), sum);
+    (fit.gain2, fit.weight_sum) = weights.white_gains(samples);
     #[cfg(feature = "noise_colour")]
     {
-        let at1 = if zb > za { 3 } else { 1 };
-        let (y1, y0) = (y1.min(y0), y0);
-        fit.basis = WeightBasis::Three {
-            a,
-            y0,
-            y1,
-            sum,
-            at1,
-        };
+        fit.basis = WeightBasis::Three(weights);
     }
     let d = step(fit.duration);
     if five && d <= FIVE_POINT_STEP {
@@ -276,54 +264,64 @@ fn three_point<M: Backend>(z0: f32, z1: f32, d: f32) -> ThreePoint {
     }
 }
 
-/// `(gain2, weight_sum)` of the three samples' peak `f` (see [`PeakFit`]) from `a`, the
-/// derivatives of `ln f` in `(ln y_0, ln y_1, ln sum)` carried through the fit's iterations,
-/// the largest sample `y0`, its larger neighbour `y1`, the pulse's `sum` and the `samples` in
-/// it: `dln f / dy_0 = a_0 / y_0 + a_s / sum`, `dln f / dy_1 = a_1 / y_1 + a_s / sum`, and
-/// `a_s / sum` for each other sample; `gain2 = f^2 sum_k (dln f / dy_k)^2`, `weight_sum = f
-/// sum_k dln f / dy_k`.
-fn three_point_gains(a: [f32; 3], f: f32, y0: f32, y1: f32, sum: f32, samples: f32) -> (f32, f32) {
-    let per_sum = a[2] / sum;
-    let g0 = a[0] / y0 + per_sum;
-    let g1 = if y1 > 0.0 {
-        a[1] / y1 + per_sum
-    } else {
-        per_sum
-    };
-    let others = (samples - 2.0).max(0.0);
-    let gain2 = f * f * (g0 * g0 + g1 * g1 + others * per_sum * per_sum);
-    let weight_sum = f * (g0 + g1 + others * per_sum);
-    if gain2.is_finite() && weight_sum.is_finite() {
-        (gain2, weight_sum)
-    } else {
-        (1.0, 1.0)
-    }
+/// The three samples' peak's weights `dF_max / dy_k` ([`peak_fit`]), from `a`, the
+/// derivatives of `ln F_max` in `(ln y_0, ln y_1, ln sum)` carried through the fit's
+/// iterations: `F_max a_0 / y_0` on the largest sample, `F_max a_1 / y_1` on its larger
+/// neighbour (index `at1` of the five about the largest; 0 where that sample is not
+/// positive), and `F_max a_s / sum` on every sample of the sum, those two included.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ThreeWeights {
+    largest: f32,
+    neighbour: f32,
+    at1: usize,
+    per_sample: f32,
 }
 
-/// The three samples' peak `f`'s weights as [`PeakFit`] holds them, from the same `a`, `y0`,
-/// `y1` and `sum` as [`three_point_gains`]: `f a_0 / y_0` on the largest sample (index 2),
-/// `f a_1 / y_1` on its larger neighbour (index `at1`), and `f a_s / sum` on every sample.
-#[cfg(feature = "noise_colour")]
-fn three_point_weights(
-    a: [f32; 3],
-    f: f32,
-    y0: f32,
-    y1: f32,
-    sum: f32,
-    at1: usize,
-) -> ([f32; 5], f32) {
-    let mut top = [0.0f32; 5];
-    if let Some(w) = top.get_mut(2) {
-        *w = f * a[0] / y0;
+impl ThreeWeights {
+    /// The weights of the peak `f` from `a`, the largest sample `y0`, its larger neighbour
+    /// `y1` at index `at1` and the pulse's `sum`; the largest sample's alone where they are
+    /// not finite.
+    fn new(a: [f32; 3], f: f32, (y0, y1, at1): (f32, f32, usize), sum: f32) -> Self {
+        let w = Self {
+            largest: f * a[0] / y0,
+            neighbour: if y1 > 0.0 { f * a[1] / y1 } else { 0.0 },
+            at1,
+            per_sample: f * a[2] / sum,
+        };
+        if w.largest.is_finite() && w.neighbour.is_finite() && w.per_sample.is_finite() {
+            w
+        } else {
+            Self {
+                largest: 1.0,
+                neighbour: 0.0,
+                at1,
+                per_sample: 0.0,
+            }
+        }
     }
-    if let (Some(w), true) = (top.get_mut(at1), y1 > 0.0) {
-        *w = f * a[1] / y1;
+
+    /// `(gain2, weight_sum)` in white noise (see [`PeakFit`]) over the pulse's `samples`,
+    /// each weighed `w_s` through the sum and the two at the top by their own `w_0`, `w_1`
+    /// besides: `gain2 = sum_k w_k^2 = w_0^2 + w_1^2 + 2 w_s (w_0 + w_1) + samples w_s^2`,
+    /// `weight_sum = sum_k w_k = w_0 + w_1 + samples w_s`.
+    fn white_gains(&self, samples: f32) -> (f32, f32) {
+        let (w0, w1, s) = (self.largest, self.neighbour, self.per_sample);
+        let own = w0 + w1;
+        (
+            w0 * w0 + w1 * w1 + s * (2.0 * own + samples * s),
+            own + samples * s,
+        )
     }
-    let per = f * a[2] / sum;
-    if top.iter().all(|w| w.is_finite()) && per.is_finite() {
-        (top, per)
-    } else {
-        ([0.0, 0.0, 1.0, 0.0, 0.0], 0.0)
+
+    /// The weights as [`PeakFit::weights`] gives them: on the five samples about the largest,
+    /// and on every sample of the sum.
+    #[cfg(feature = "noise_colour")]
+    fn on_five(&self) -> ([f32; 5], f32) {
+        let mut top = [0.0, 0.0, self.largest, 0.0, 0.0];
+        if let Some(w) = top.get_mut(self.at1) {
+            *w = self.neighbour;
+        }
+        (top, self.per_sample)
     }
 }
 

@@ -58,9 +58,9 @@ fn main() -> anyhow::Result<()> {
             .unwrap_or_default();
         let noise = equalised_noise(scene.equaliser());
         colours.push(format!("{name:<12} {}", noise.describe(scene.equaliser())));
+        let colour = scene.equaliser().noise_colour();
         for n in [8.0, 12.0, 16.0, 20.0] {
             for five in [true, false] {
-                let colour = scene.equaliser().noise_colour();
                 let [stated, white, coloured, stated_coloured] =
                     peak_variances(&noise, colour, n, five);
                 println!(

@@ -39,6 +39,7 @@ fn unit_pulse(series: &[(f64, f64)]) -> ContinuousPulse<'_> {
         series,
         peak_n: 1.0,
         duration_s: 1.0,
+        five: true,
     }
 }
 

@@ -79,7 +79,7 @@ fn phase_table_corrects_unseen_phases_of_an_unseen_impact() {
         // 23 phases offset by 0.29 of their step: none is a calibration phase (j + 1/2) / 32.
         for j in 0..23 {
             let phase = (j as f64 + 0.29) / 23.0;
-            let (f, samples, a) = fit_sampled_at(&series, dt, phase).unwrap();
+            let (f, samples, a) = fit_sampled_at(&series, dt, phase, true).unwrap();
             // The detector measures no shorter pulse.
             if samples < f64::from(coalshock::scene::MIN_DURATION_SAMPLES) {
                 continue;
@@ -157,7 +157,8 @@ fn tsuji_residuals_between_rows_stay_within_the_stated_spread() {
         let n = 2.5 * 1.25f64.powf(k as f64 + 0.37);
         let dt = duration_s / n;
         for j in 0..23 {
-            let (f, samples, a) = fit_sampled_at(&series, dt, (j as f64 + 0.29) / 23.0).unwrap();
+            let (f, samples, a) =
+                fit_sampled_at(&series, dt, (j as f64 + 0.29) / 23.0, true).unwrap();
             let ln_n = kernel_ln_n(&table, samples, a);
             let (pf, pt, sf, st) = table.at(ln_n, a as f32).unwrap();
             let (lf, lt) = ((f / peak_n).ln(), (samples * dt / duration_s).ln());
@@ -193,7 +194,8 @@ fn left_as_read(
     for &n in ns {
         let dt = duration_s / n;
         for j in 0..23 {
-            let Some((f, samples, a)) = fit_sampled_at(series, dt, (j as f64 + 0.29) / 23.0) else {
+            let Some((f, samples, a)) = fit_sampled_at(series, dt, (j as f64 + 0.29) / 23.0, true)
+            else {
                 continue;
             };
             // The detector measures no pulse shorter than this.
@@ -231,6 +233,7 @@ fn means_fitted_as_read_leave_less_on_an_unseen_impact() {
                 series,
                 peak_n: *peak_n,
                 duration_s: *duration_s,
+                five: true,
             })
             .collect();
         let fitted = phase_calibration(&pulses, None).to_kernel();

@@ -25,8 +25,8 @@ use coalshock::scene::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP};
 
 use crate::bridge::equalised_fit::EqualisedChain;
 use crate::bridge::pulse_shape::scene_shape;
-use crate::bridge::sampled_fit::force_at;
 pub use crate::bridge::sampled_fit::{ContinuousPulse, fit_sampled_at, mean_and_sigma};
+use crate::bridge::sampled_fit::{force_at, reads_five_samples};
 use crate::bridge::sampled_phase::{Phase64, phase_calibration};
 use crate::bridge::skew_tolerance::{GridImpact, sampled_skew_tolerance};
 use crate::bridge::skewness::weighted_skewness;
@@ -86,7 +86,7 @@ pub fn sampled_calibration(pulses: &[ContinuousPulse]) -> Sampled64 {
         for p in pulses {
             let dt = p.duration_s / n;
             for phase in 0..SAMPLED_PHASES {
-                if let Some((peak, samples)) = fit_sampled(p.series, dt, phase) {
+                if let Some((peak, samples)) = fit_sampled(p, dt, phase) {
                     f.push((peak / p.peak_n).ln());
                     t.push((samples * dt / p.duration_s).ln());
                 }
@@ -98,10 +98,11 @@ pub fn sampled_calibration(pulses: &[ContinuousPulse]) -> Sampled64 {
     out
 }
 
-/// The kernel's fit of `series` sampled every `dt` from phase `phase / SAMPLED_PHASES`: peak
-/// (N) and duration (samples).
-fn fit_sampled(series: &[(f64, f64)], dt: f64, phase: usize) -> Option<(f64, f64)> {
-    fit_sampled_at(series, dt, phase as f64 / SAMPLED_PHASES as f64).map(|(f, t, _)| (f, t))
+/// The kernel's fit of `p`'s series sampled every `dt` from phase `phase / SAMPLED_PHASES`:
+/// peak (N) and duration (samples).
+fn fit_sampled(p: &ContinuousPulse, dt: f64, phase: usize) -> Option<(f64, f64)> {
+    let phase = phase as f64 / SAMPLED_PHASES as f64;
+    fit_sampled_at(p.series, dt, phase, p.five).map(|(f, t, _)| (f, t))
 }
 
 /// Points recorded per Hertz contact time when a pulse is integrated for calibration.
@@ -383,7 +384,7 @@ pub fn calibrate(
         .then(|| scene_shape(scene.contact, all.iter().map(|(_, s)| s.as_slice())))
         .flatten();
     let sampled_fit = (shortest_s * fs < SMOOTH_FROM_SAMPLES)
-        .then(|| sampled_of_grid(&all, &pulses, damped, chain));
+        .then(|| sampled_of_grid(&all, &pulses, (damped, reads_five_samples(scene)), chain));
     let (sampled_fit, phase) = sampled_fit.map_or((None, None), |(s, p)| (Some(s), p));
     let n = all.len() as f64;
     let skew_mean = skews.iter().sum::<f64>() / n;
@@ -486,11 +487,11 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
 /// [`sampled_calibration`] of the grid's pulses: their series (`all`) with their peak force
 /// (N) and duration from the area (s) (`pulses`); for a damped contact (`damped`) also the
 /// correction by samples per pulse and sampling phase ([`phase_calibration`]), through
-/// `chain` where there is one.
+/// `chain` where there is one; `five` as the kernel reads them ([`reads_five_samples`]).
 fn sampled_of_grid(
     all: &[(PulseRatios, Vec<(f64, f64)>)],
     pulses: &[(f64, f64)],
-    damped: bool,
+    (damped, five): (bool, bool),
     chain: Option<&EqualisedChain>,
 ) -> (Sampled64, Option<Phase64>) {
     let continuous: Vec<ContinuousPulse> = all
@@ -500,6 +501,7 @@ fn sampled_of_grid(
             series,
             peak_n,
             duration_s,
+            five,
         })
         .collect();
     let phase = damped.then(|| phase_calibration(&continuous, chain));

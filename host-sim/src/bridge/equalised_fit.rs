@@ -94,7 +94,7 @@ impl EqualisedChain {
     /// (`None` where the fit fails).
     pub fn fits(&self, pulse: &ContinuousPulse, n: f64, offset: f64) -> Vec<Option<[f64; 3]>> {
         let samples = self.samples(pulse, n, offset);
-        samples.iter().map(|v| fit_samples(v)).collect()
+        samples.iter().map(|v| fit_samples(v, pulse.five)).collect()
     }
 
     /// `pulse` stretched to `n` samples per pulse, through the chain and the equaliser, at the

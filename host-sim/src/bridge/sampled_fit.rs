@@ -8,6 +8,8 @@ use coalshock::math::Libm;
 use coalshock::sampled_phase::neighbour_asymmetry;
 use coalshock::shape_fit::five_about;
 
+use crate::scene::SceneFile;
+
 /// One calibration impact's continuous pulse: its force series `(t_s, force_n)`, its peak (N)
 /// and its duration from the area `area / (C_AREA F_peak)` (s).
 pub struct ContinuousPulse<'a> {
@@ -17,6 +19,18 @@ pub struct ContinuousPulse<'a> {
     pub peak_n: f64,
     /// `area / (C_AREA peak_n)`.
     pub duration_s: f64,
+    /// The kernel reads the scene's pulses by the five samples' fit
+    /// ([`reads_five_samples`]).
+    pub five: bool,
+}
+
+/// Whether the kernel reads `scene`'s pulses by the five samples' fit about the top
+/// (`coalshock::shape_fit::peak_fit`'s `five`): when every pulse of the scene has one shape,
+/// its law self-similar
+/// ([`crate::physics::law_spec::LawSpec::self_similar`]) and no class yielding. The kernel decides
+/// it from what these give it: no class's envelope bent by a ratio table, and no broad top.
+pub fn reads_five_samples(scene: &SceneFile) -> bool {
+    scene.contact.self_similar() && !scene.yields()
 }
 
 /// `series` (`(t_s, force_n)`) sampled every `dt` (s) from `phase * dt` after its start while
@@ -34,21 +48,28 @@ pub fn sample_series(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<Vec<f
 
 /// The kernel's fit of `series` sampled every `dt` from `phase * dt` after its start
 /// (`0 <= phase < 1`): peak (N), duration (samples) and the neighbour asymmetry the detector
-/// reports (`coalshock::sampled_phase::neighbour_asymmetry`).
-pub fn fit_sampled_at(series: &[(f64, f64)], dt: f64, phase: f64) -> Option<(f64, f64, f64)> {
-    let [peak, samples, a] = fit_samples(&sample_series(series, dt, phase)?)?;
+/// reports (`coalshock::sampled_phase::neighbour_asymmetry`); `five` as [`fit_samples`].
+pub fn fit_sampled_at(
+    series: &[(f64, f64)],
+    dt: f64,
+    phase: f64,
+    five: bool,
+) -> Option<(f64, f64, f64)> {
+    let [peak, samples, a] = fit_samples(&sample_series(series, dt, phase)?, five)?;
     Some((peak, samples, a))
 }
 
 /// The kernel's fit of the samples `v` of one pulse, as the detector fits a calibrated
 /// (damped or yielding) contact's: `[peak, duration (samples), neighbour asymmetry]` from the
-/// largest sample, two either side of it and the sum; the peak in the unit of `v`.
-pub fn fit_samples(v: &[f64]) -> Option<[f64; 3]> {
+/// largest sample, two either side of it and the sum; the peak in the unit of `v`. `five`: the
+/// scene's pulses are read by the five samples' fit ([`reads_five_samples`]), else through
+/// three.
+pub fn fit_samples(v: &[f64], five: bool) -> Option<[f64; 3]> {
     let (i, _) = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
     let sum: f64 = v.iter().sum();
     let v32: Vec<f32> = v.iter().map(|&x| x as f32).collect();
     let top = five_about(&v32, i);
-    let (peak, samples) = shape_fit::<Libm>(top, sum as f32, false)?;
+    let (peak, samples) = shape_fit::<Libm>(top, sum as f32, five)?;
     let a = neighbour_asymmetry(top[1], top[2], top[3]);
     Some([f64::from(peak), f64::from(samples), f64::from(a)])
 }

@@ -141,7 +141,7 @@ fn fits_at_phase(
                 .map(|j| {
                     let phase = (j as f64 + offset) / TABLE_PHASES as f64;
                     let dt = p.duration_s / n;
-                    let (peak, samples, a) = fit_sampled_at(p.series, dt, phase)?;
+                    let (peak, samples, a) = fit_sampled_at(p.series, dt, phase, p.five)?;
                     Some([peak / p.peak_n, samples, a])
                 })
                 .collect(),
