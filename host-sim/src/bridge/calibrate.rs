@@ -384,7 +384,7 @@ pub fn calibrate(
         .then(|| scene_shape(scene.contact, all.iter().map(|(_, s)| s.as_slice())))
         .flatten();
     let sampled_fit = (shortest_s * fs < SMOOTH_FROM_SAMPLES)
-        .then(|| sampled_of_grid(&all, &pulses, (damped, reads_five_samples(scene)), chain));
+        .then(|| sampled_of_grid(&all, &pulses, damped, reads_five_samples(scene), chain));
     let (sampled_fit, phase) = sampled_fit.map_or((None, None), |(s, p)| (Some(s), p));
     let n = all.len() as f64;
     let skew_mean = skews.iter().sum::<f64>() / n;
@@ -491,7 +491,8 @@ fn integrate_grid(scene: &SceneFile) -> Result<GridPulses, SimError> {
 fn sampled_of_grid(
     all: &[(PulseRatios, Vec<(f64, f64)>)],
     pulses: &[(f64, f64)],
-    (damped, five): (bool, bool),
+    damped: bool,
+    five: bool,
     chain: Option<&EqualisedChain>,
 ) -> (Sampled64, Option<Phase64>) {
     let continuous: Vec<ContinuousPulse> = all

@@ -26,9 +26,9 @@ pub struct ContinuousPulse<'a> {
 
 /// Whether the kernel reads `scene`'s pulses by the five samples' fit about the top
 /// (`coalshock::shape_fit::peak_fit`'s `five`): when every pulse of the scene has one shape,
-/// its law self-similar
-/// ([`crate::physics::law_spec::LawSpec::self_similar`]) and no class yielding. The kernel decides
-/// it from what these give it: no class's envelope bent by a ratio table, and no broad top.
+/// its law self-similar ([`crate::physics::law_spec::LawSpec::self_similar`]) and no class
+/// yielding. The kernel decides it from what these give it: no class's envelope bent by a
+/// ratio table, and no broad top (`coalshock::detector`'s `one_shape`).
 pub fn reads_five_samples(scene: &SceneFile) -> bool {
     scene.contact.self_similar() && !scene.yields()
 }
