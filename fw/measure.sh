@@ -82,21 +82,8 @@ print(f"{prefix}static_ram_bytes {ram}")
 status=0
 
 section "build: node firmware, thumbv7em-none-eabihf (Cortex-M4F)"
-# The firmware is its own workspace (fw/Cargo.toml) and reads fw/.cargo/config.toml, so cargo
-# runs in fw/; it shares the repository's target directory.
-# Its manifest is named through a fixed path, a symlink to this checkout, so that the figures do
-# not depend on where the checkout lies. The kernel (the repository root) and iis3dwb are path
-# dependencies outside the firmware's workspace, and cargo hashes their absolute path into their
-# `-C metadata`; rustc derives the symbol names from it, the names order the functions in the
-# image, and the alignment padding between them follows: one commit measured `.text` 8 B apart
-# from two checkouts (flash_code_bytes, settle_flash_added_bytes). `--remap-path-prefix` does
-# not enter that hash. The lock, held until the script ends, makes a run from another checkout
-# wait instead of repointing the symlink under this one's builds.
-src=/tmp/coalshock-fw-src
-exec 9> "$src.lock"
-flock 9
-ln -sfn "$root" "$src"
-fwcargo() { (cd fw && cargo "$@" --manifest-path "$src/fw/Cargo.toml"); }
+# The firmware is built through a fixed path (fw/fixed-path.sh says why).
+. fw/fixed-path.sh
 fwcargo build --release --target thumbv7em-none-eabihf --bin node
 elf="$target_dir/thumbv7em-none-eabihf/release/node"
 
@@ -143,7 +130,7 @@ echo "chain_stream_bytes $(stat -c %s "$chain_stream")" | tee -a "$out/measures.
 
 section "panic paths: fw/nopanic.py"
 set +e
-python3 fw/nopanic.py --objdump "$tools/llvm-objdump" --package-src "$src/src" "$elf" \
+python3 fw/nopanic.py --objdump "$tools/llvm-objdump" --package-src "$fw_src/src" "$elf" \
     > "$out/nopanic.txt"
 set -e
 cat "$out/nopanic.txt"
@@ -213,7 +200,7 @@ sed -n -e 's/^measure \(yield_[a-z0-9_]*\) \([0-9]*\)$/\1 \2/p' \
     >> "$out/measures.txt"
 sizes "$elf_p" "plasticity_" "$streams_yield" | tee -a "$out/measures.txt"
 set +e
-python3 fw/nopanic.py --objdump "$tools/llvm-objdump" --package-src "$src/src" "$elf_p" \
+python3 fw/nopanic.py --objdump "$tools/llvm-objdump" --package-src "$fw_src/src" "$elf_p" \
     > "$out/nopanic-plasticity.txt"
 set -e
 tail -1 "$out/nopanic-plasticity.txt"

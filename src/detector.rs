@@ -523,7 +523,9 @@ pub struct Detector<M: Backend = DefaultBackend> {
     flat_top_ratio: f32,
     spike_fraction: f32,
     /// The contact is the undamped Hertz law (no calibration): a clipped pulse is read from
-    /// its flanks by the Hertz series.
+    /// its flanks by the Hertz series, and a short pulse is read through its top, not by the
+    /// contact's tabulated shape ([`Detector::short_measurement`], which the Hertz shape of
+    /// the top already is).
     hertz: bool,
     /// Every pulse of the scene has one shape ([`one_shape`]): its top is read with the Hertz
     /// shape through five samples ([`peak_fit`]'s `five`).

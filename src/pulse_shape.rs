@@ -475,6 +475,8 @@ struct ShapeFit<'a> {
     chain: FlankChain,
     shape: &'a PulseShape,
     noise: f32,
+    /// The sum row's weight against one flank sample's: 0, no sum row, until
+    /// [`Self::weighted`] sets it at a point; every residual is taken of a weighted fit.
     sum_weight: f32,
     /// The clipping level (counts).
     level: f32,

@@ -189,7 +189,7 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
         fit.peak = top3.peak;
         fit.duration = sum / (C_AREA * fit.peak);
     }
-    let weights = ThreeWeights::new(a, fit.peak, (y0, y1, at1), sum);
+    let weights = ThreeWeights::new(a, fit.peak, y0, y1, at1, sum);
     (fit.gain2, fit.weight_sum) = weights.white_gains(samples);
     #[cfg(feature = "noise_colour")]
     {
@@ -273,6 +273,8 @@ fn three_point<M: Backend>(z0: f32, z1: f32, d: f32) -> ThreePoint {
 pub(crate) struct ThreeWeights {
     largest: f32,
     neighbour: f32,
+    /// Only the noise's colour places the weights on the five samples ([`Self::on_five`]).
+    #[cfg(feature = "noise_colour")]
     at1: usize,
     per_sample: f32,
 }
@@ -281,10 +283,13 @@ impl ThreeWeights {
     /// The weights of the peak `f` from `a`, the largest sample `y0`, its larger neighbour
     /// `y1` at index `at1` and the pulse's `sum`; the largest sample's alone where they are
     /// not finite.
-    fn new(a: [f32; 3], f: f32, (y0, y1, at1): (f32, f32, usize), sum: f32) -> Self {
+    fn new(a: [f32; 3], f: f32, y0: f32, y1: f32, at1: usize, sum: f32) -> Self {
+        #[cfg(not(feature = "noise_colour"))]
+        let _ = at1;
         let w = Self {
             largest: f * a[0] / y0,
             neighbour: if y1 > 0.0 { f * a[1] / y1 } else { 0.0 },
+            #[cfg(feature = "noise_colour")]
             at1,
             per_sample: f * a[2] / sum,
         };
@@ -294,6 +299,7 @@ impl ThreeWeights {
             Self {
                 largest: 1.0,
                 neighbour: 0.0,
+                #[cfg(feature = "noise_colour")]
                 at1,
                 per_sample: 0.0,
             }
