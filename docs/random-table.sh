@@ -189,7 +189,12 @@ faint=docs/faint/faint_rigid.toml
     echo "49.9 % coverage, at commit 7fef504). The reference counts each impact with the probability"
     echo "that a matched filter at the trigger's false-alarm rate finds it (\"found at the limit\"),"
     echo "where the kernel's detector triggers on one sample: most of the gap is the impacts the"
-    echo "kernel misses (\"missed\")."
+    echo "kernel misses (\"missed\"). Above the trigger the measurement's own second-order biases"
+    echo "are taken out: the five samples' vertex bias in \`ln F_max\` (\`PeakFit::vertex_bias\`), the"
+    echo "sum's \`-var / (2 S^2)\` in \`ln t_c\` (\`Detector::unbiased_sum\`), and the lift a pulse's own"
+    echo "rising edge gave the baseline (\`Detector::baseline_before\`). What \`ln t_c\` keeps at 6-16"
+    echo "noise RMS comes from the impacts that never trigger, whose samples lift the baseline as"
+    echo "quiet ones do, and from the tail past the release."
     echo
     echo '```'
     "$bin" evaluate --scene "$faint" --n "$n" --seed "$seed" 2>&1 |

@@ -73,6 +73,14 @@ pub struct PeakFit {
     /// Sum of the peak's weights over the samples, `sum_k dF_max / dy_k`: the peak shares
     /// `sigma^2 weight_sum` of covariance with the pulse's sum.
     pub weight_sum: f32,
+    /// The vertex's bias per unit of one sample's noise variance: the relative bias of `F_max`
+    /// is `vertex_bias noise^2` (1/counts^2; 0 but for the five samples' fit). Where the fit
+    /// places the top between the samples is noisy, with variance `var k_peak = noise^2
+    /// [N^-1]_kk`, and the fitted top `F_max g(x)`, `g = 1 - (3/4) x^2 + ..` at `x = d (k -
+    /// k_peak)`, lies above the samples by `(3/4) d^2 var k_peak` of `F_max` on average: the
+    /// least-squares vertex's second-order bias (Box 1971), so `vertex_bias = (3/4) d^2
+    /// [N^-1]_kk`.
+    pub vertex_bias: f32,
     /// What [`PeakFit::weights`] computes the peak's weights from.
     #[cfg(feature = "noise_colour")]
     pub(crate) basis: WeightBasis,
@@ -160,6 +168,7 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
         duration: sum / (C_AREA * y0),
         gain2: 1.0,
         weight_sum: 1.0,
+        vertex_bias: 0.0,
         #[cfg(feature = "noise_colour")]
         basis: WeightBasis::Largest,
     };
@@ -205,6 +214,7 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
                 break;
             };
             (fit.peak, fit.gain2, fit.weight_sum) = (p[0], gains.0, gains.1);
+            fit.vertex_bias = 0.75 * p[2] * p[2] * gains.2;
             #[cfg(feature = "noise_colour")]
             {
                 fit.basis = WeightBasis::Five(from);
@@ -333,9 +343,9 @@ impl ThreeWeights {
 
 /// One Gauss-Newton step of the five-sample fit of `F_max g(d (k - k_peak))` in
 /// `p = [F_max, k_peak, d]` (updated in place; `k_peak` kept within one sample of the largest,
-/// `d` within a factor 1.25 of `d_area`, the area's): `(gain2, weight_sum)` of the step's
-/// normal equations, `None` when they are singular or the peak leaves the positive.
-fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32)> {
+/// `d` within a factor 1.25 of `d_area`, the area's): `(gain2, weight_sum, [N^-1]_kk)` of the
+/// step's normal equations, `None` when they are singular or the peak leaves the positive.
+fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32, f32)> {
     let ([peak, offset, d], inv, c) = gauss_newton(&FIVE_KS, top, *p, &mut [])?;
     if peak.is_nan() || peak <= 0.0 {
         return None;
@@ -346,7 +356,7 @@ fn five_point(top: &[f32; 5], p: &mut [f32; 3], d_area: f32) -> Option<(f32, f32
         d.max(0.8 * d_area).min(1.25 * d_area),
     ];
     let [w0, w1, w2] = inv[0];
-    Some((w0, w0 * c[0] + w1 * c[1] + w2 * c[2]))
+    Some((w0, w0 * c[0] + w1 * c[1] + w2 * c[2], inv[1][1]))
 }
 
 /// The five samples' offsets from the largest.
