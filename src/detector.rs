@@ -1478,7 +1478,7 @@ impl<M: Backend> Detector<M> {
                 duration,
                 gain2: 1.0 / self.smooth as f32,
                 weight_sum: 1.0,
-                vertex_bias: 0.0,
+                vertex_bias: [0.0; 2],
                 #[cfg(feature = "noise_colour")]
                 basis: crate::shape_fit::WeightBasis::Largest,
             })?
@@ -2100,10 +2100,15 @@ fn clamp_low<M: Backend>(v: f32, trigger: f32, level2: impl FnOnce() -> f32) -> 
 }
 
 /// `fit` with its peak's second-order bias taken out ([`PeakFit::vertex_bias`], at `noise`
-/// counts RMS per sample, the correlations behind a chain left out): `F_max / (1 + b)` and the
-/// duration, the area over the peak, `t_c (1 + b)`.
+/// counts RMS per sample, the correlations behind a chain left out): `b = (3/4) d^2 min(noise^2
+/// [N^-1]_kk, 2.25)`, `F_max / (1 + b)` and the duration, the area over the peak, `t_c (1 +
+/// b)`. The fitted offset cannot stray more than 1.5 samples from the top (within one of the
+/// largest, which is within half of the top), however large its linear variance: uncapped,
+/// an ill-conditioned fit's variance took `noisy`'s worst error in `ln F_max` from 0.18 to
+/// 0.25.
 fn unbiased_vertex(fit: PeakFit, noise: f32) -> PeakFit {
-    let b = fit.vertex_bias * noise * noise;
+    let [curvature, offset_gain2] = fit.vertex_bias;
+    let b = curvature * (offset_gain2 * noise * noise).min(2.25);
     PeakFit {
         peak: fit.peak / (1.0 + b),
         duration: fit.duration * (1.0 + b),

@@ -73,14 +73,15 @@ pub struct PeakFit {
     /// Sum of the peak's weights over the samples, `sum_k dF_max / dy_k`: the peak shares
     /// `sigma^2 weight_sum` of covariance with the pulse's sum.
     pub weight_sum: f32,
-    /// The vertex's bias per unit of one sample's noise variance: the relative bias of `F_max`
-    /// is `vertex_bias noise^2` (1/counts^2; 0 but for the five samples' fit). Where the fit
-    /// places the top between the samples is noisy, with variance `var k_peak = noise^2
-    /// [N^-1]_kk`, and the fitted top `F_max g(x)`, `g = 1 - (3/4) x^2 + ..` at `x = d (k -
-    /// k_peak)`, lies above the samples by `(3/4) d^2 var k_peak` of `F_max` on average: the
-    /// least-squares vertex's second-order bias (Box 1971), so `vertex_bias = (3/4) d^2
-    /// [N^-1]_kk`.
-    pub vertex_bias: f32,
+    /// What the vertex's second-order bias takes, `[(3/4) d^2, [N^-1]_kk]` (`[0, 0]` but for
+    /// the five samples' fit): where the fit places the top between the samples is noisy,
+    /// with variance `var k_peak = noise^2 [N^-1]_kk` (samples^2), and the fitted top `F_max
+    /// g(x)`, `g = 1 - (3/4) x^2 + ..` at `x = d (k - k_peak)`, lies above the samples by
+    /// `(3/4) d^2 var k_peak` of `F_max` on average, the least-squares vertex's bias (Box
+    /// 1971). The fit keeps `k_peak` within one sample of the largest, and the top lies within
+    /// half a sample of it, so `|k_peak - k_top| <= 1.5` and `var k_peak` is taken at most
+    /// `2.25` (the detector's `unbiased_vertex`).
+    pub vertex_bias: [f32; 2],
     /// What [`PeakFit::weights`] computes the peak's weights from.
     #[cfg(feature = "noise_colour")]
     pub(crate) basis: WeightBasis,
@@ -168,7 +169,7 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
         duration: sum / (C_AREA * y0),
         gain2: 1.0,
         weight_sum: 1.0,
-        vertex_bias: 0.0,
+        vertex_bias: [0.0; 2],
         #[cfg(feature = "noise_colour")]
         basis: WeightBasis::Largest,
     };
@@ -214,7 +215,7 @@ pub fn peak_fit<M: Backend>(top: [f32; 5], sum: f32, samples: f32, five: bool) -
                 break;
             };
             (fit.peak, fit.gain2, fit.weight_sum) = (p[0], gains.0, gains.1);
-            fit.vertex_bias = 0.75 * p[2] * p[2] * gains.2;
+            fit.vertex_bias = [0.75 * p[2] * p[2], gains.2];
             #[cfg(feature = "noise_colour")]
             {
                 fit.basis = WeightBasis::Five(from);
