@@ -169,6 +169,19 @@ m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
 print(f"reference_node_settle_flash_added_bytes "
       f"{int(m['reference_node_settle_flash_bytes']) - int(m['reference_node_flash_bytes'])}")
 PY
+# The same node with the kernel's `second_order` (fw feature `second_order`, a default one):
+# what taking the measurement's second-order biases out adds to the size-optimised node, which
+# leaves it out to fit its 32 KiB part (`reference_node_second_order_flash_added_bytes`).
+fwcargo build --profile board --no-default-features --features board,second_order \
+    --bin reference_node
+sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_second_order_" 0 \
+    | grep '_flash_bytes ' | tee -a "$out/measures.txt"
+python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
+import sys
+m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
+print(f"reference_node_second_order_flash_added_bytes "
+      f"{int(m['reference_node_second_order_flash_bytes']) - int(m['reference_node_flash_bytes'])}")
+PY
 
 section "plasticity: the yield feature (fw feature plasticity; kernel feature plasticity)"
 # Three more builds (the default ones above stay as they were and carry none of it):
@@ -225,20 +238,21 @@ sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_p
 
 section "settle and noise_colour: the node without each of the kernel's features"
 # The measuring node built without the fw feature `settle` (`--no-default-features --features
-# noise_colour`): the same image as the default one but for the kernel's `settle`, whose
+# noise_colour,second_order`): the same image as the default one but for the kernel's `settle`, whose
 # monitor slot is then `NoSettle` (no RAM). `settle_flash_added_bytes` is the default node's
 # `flash_code_bytes` minus this one's (`nosettle_flash_code_bytes`): the flash the feature adds
 # to the measuring node (both backends, opt-level 3). Its RAM per monitor is the node's
 # `settle_bytes`.
 fwcargo build --release --target thumbv7em-none-eabihf --bin node --no-default-features \
-    --features noise_colour
+    --features noise_colour,second_order
 sizes "$elf" "nosettle_" "$streams_node" | grep '_flash_code_bytes ' \
     | tee -a "$out/measures.txt"
-# The same without the fw feature `noise_colour` (`--no-default-features --features settle`):
+# The same without the fw feature `noise_colour` (`--no-default-features --features
+# settle,second_order`):
 # `noise_colour_flash_added_bytes` is what the kernel's `noise_colour` adds (the colour's pass
 # in the equaliser's design, the fits' weights and their quadratic form in the detector).
 fwcargo build --release --target thumbv7em-none-eabihf --bin node --no-default-features \
-    --features settle
+    --features settle,second_order
 sizes "$elf" "nocolour_" "$streams_node" | grep '_flash_code_bytes ' \
     | tee -a "$out/measures.txt"
 # Run, for what the feature costs in instructions: a rigid scene's classification (the paper

@@ -495,6 +495,19 @@ impl RingNoise {
     }
 }
 
+/// What a pulse's pre-trigger samples hold against the baseline
+/// (`Detector::pre_trigger_window`).
+struct PreTrigger {
+    /// Sum of the oldest half's values less the baseline (counts).
+    old_sum: f32,
+    /// Sum of their steps into the baseline (counts).
+    #[cfg(feature = "second_order")]
+    steps: f32,
+    /// How many of the steps were not clamped.
+    #[cfg(feature = "second_order")]
+    free: f32,
+}
+
 /// The noise model of one measured pulse (natural-log units, per [`Detector::sigmas`]).
 struct Sigmas {
     /// Standard deviation of `ln F_max`.
@@ -1150,27 +1163,59 @@ impl<M: Backend> Detector<M> {
         })
     }
 
-    /// The baseline before the `values` (the last samples it took in, oldest first) moved
-    /// it: the pre-trigger samples of a pulse hold its rising edge below the trigger, which
-    /// the baseline took in as quiet and would subtract from every sample of the pulse (and of
-    /// the pulses after it). Each moved it by `alpha` times its step, `x_i - b_(i-1)` or the
-    /// floor a sample far below it is clamped to ([`Detector::baseline_step`]); to first
-    /// order in `alpha` (the baseline moves by `O(alpha)` over the samples) the steps taken at
-    /// the baseline `b` now sum to `S`, and `n` of them unclamped moved with it, so `b =
-    /// b_before + alpha (S + n (b - b_before))`: `b_before = b - alpha S / (1 - n alpha)`.
-    /// Where `n alpha` exceeds 1/2 (a baseline time constant under 64 samples) the baseline
-    /// stays.
-    fn baseline_before(&self, values: impl Iterator<Item = f32>) -> f32 {
+    /// The `len` pre-trigger samples from ring slot `first` against the baseline: the sum of
+    /// the oldest half's values, and of their steps into the baseline (each value less the
+    /// baseline, at least `floor`, as [`Detector::baseline_step`] takes it) with the count of
+    /// the steps not clamped (feature `second_order`). Plain loops, kept out of line: the
+    /// pulse's start is cold.
+    #[inline(never)]
+    fn pre_trigger_window(&self, first: usize, len: usize, floor: f32) -> PreTrigger {
+        #[cfg(not(feature = "second_order"))]
+        let _ = floor;
         let b = self.baseline;
-        let (sum, free) = values.fold((0.0f32, 0.0f32), |(sum, free), x| {
-            let step = self.baseline_step(x - b);
-            (sum + step, free + if step == x - b { 1.0 } else { 0.0 })
-        });
-        let kept = 1.0 - free * self.alpha;
-        if kept < 0.5 {
-            return b;
+        let value = |k: usize| {
+            let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
+            self.pre.get(i).copied().unwrap_or(0.0) - b
+        };
+        let mut w = PreTrigger {
+            old_sum: 0.0,
+            #[cfg(feature = "second_order")]
+            steps: 0.0,
+            #[cfg(feature = "second_order")]
+            free: 0.0,
+        };
+        for k in 0..len / 2 {
+            w.old_sum += value(k);
         }
-        b - self.alpha * sum / kept
+        #[cfg(feature = "second_order")]
+        for k in 0..len {
+            let v = value(k);
+            // A compare and a select (`f32::max` is a call on the M4F); NaN takes the floor.
+            if v >= floor {
+                w.steps += v;
+                w.free += 1.0;
+            } else {
+                w.steps += floor;
+            }
+        }
+        w
+    }
+
+    /// The baseline before the pre-trigger samples of `window` moved it: they hold a pulse's
+    /// rising edge below the trigger, which the baseline took in as quiet and would subtract
+    /// from every sample of the pulse (and of the pulses after it). Each moved it by `alpha`
+    /// times its step; to first order in `alpha` (the baseline moves by `O(alpha)` over the
+    /// samples) the steps taken at the baseline `b` now sum to `S`, and `n` of them unclamped
+    /// moved with it, so `b = b_before + alpha (S + n (b - b_before))`: `b_before = b - alpha S /
+    /// (1 - n alpha)`. Where `n alpha` exceeds 1/2 (a baseline time constant under 64 samples)
+    /// the baseline stays.
+    #[cfg(feature = "second_order")]
+    fn baseline_before(&self, window: &PreTrigger) -> f32 {
+        let kept = 1.0 - window.free * self.alpha;
+        if kept < 0.5 {
+            return self.baseline;
+        }
+        self.baseline - self.alpha * window.steps / kept
     }
 
     /// Starts a pulse with the pre-trigger samples, oldest first.
@@ -1200,11 +1245,13 @@ impl<M: Backend> Detector<M> {
         let old = len / 2;
         // The oldest half of the pre-trigger samples: clear of the pulse's leading edge. Where
         // they sit at the baseline, the pre-trigger samples are the pulse's, and the baseline
-        // lets go of them; where they do not, it lags a drift, which they are part of.
-        let old_sum: f32 = (0..old).map(|k| at(k) - self.baseline).sum();
-        p.drift = old >= 4 && (old_sum / old as f32).abs() > 0.5 * p.trigger;
+        // lets go of them; where they do not, it lags a drift, which they are part of. The
+        // floor of a baseline step is the trigger level in force ([`clamp_low`]).
+        let window = self.pre_trigger_window(first, len, -p.trigger);
+        p.drift = old >= 4 && (window.old_sum / old as f32).abs() > 0.5 * p.trigger;
+        #[cfg(feature = "second_order")]
         if !p.drift {
-            self.baseline = self.baseline_before((0..len).map(at));
+            self.baseline = self.baseline_before(&window);
         }
         let mut old_sq = 0.0;
         for k in 0..len {
@@ -1471,7 +1518,10 @@ impl<M: Backend> Detector<M> {
         let [before2, before] = p.before_max;
         let [after, after2] = p.after_max;
         let samples = p.samples as f32;
+        #[cfg(feature = "second_order")]
         let sum = self.unbiased_sum(samples);
+        #[cfg(not(feature = "second_order"))]
+        let sum = p.sum;
         let fit = if self.smooth > 1 {
             smooth_fit(p.top_smooth, self.smooth, sum).map(|(peak, duration)| PeakFit {
                 peak,
@@ -1498,13 +1548,16 @@ impl<M: Backend> Detector<M> {
             }
             fit
         };
-        Some(unbiased_vertex(fit, self.noise))
+        #[cfg(feature = "second_order")]
+        let fit = unbiased_vertex(fit, self.noise);
+        Some(fit)
     }
 
     /// The pulse's sum of `samples` samples, `S`, with `ln S` made unbiased to second order in
     /// its noise: `E[ln S] = ln S_0 - var S / (2 S_0^2)`, so `S (1 + var S / (2 S^2))` with `var S
     /// = noise^2 V(samples)` ([`Detector::sum_variance`]). The duration is the area over the
     /// peak: at 9 noise RMS and 44 samples the bias of `ln t_c` it removes is -0.005.
+    #[cfg(feature = "second_order")]
     fn unbiased_sum(&self, samples: f32) -> f32 {
         let sum = self.pulse.sum;
         let var = self.noise * self.noise * self.sum_variance(samples);
@@ -2106,6 +2159,7 @@ fn clamp_low<M: Backend>(v: f32, trigger: f32, level2: impl FnOnce() -> f32) -> 
 /// largest, which is within half of the top), however large its linear variance: uncapped,
 /// an ill-conditioned fit's variance took `noisy`'s worst error in `ln F_max` from 0.18 to
 /// 0.25.
+#[cfg(feature = "second_order")]
 fn unbiased_vertex(fit: PeakFit, noise: f32) -> PeakFit {
     let [curvature, offset_gain2] = fit.vertex_bias;
     let b = curvature * (offset_gain2 * noise * noise).min(2.25);
