@@ -157,31 +157,25 @@ section "reference node: STM32F405 + IIS3DWB (build only; no IIS3DWB in QEMU)"
 fwcargo build --profile board --no-default-features --features board --bin reference_node
 sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_" 0 \
     | grep -v '_flash_code_bytes ' | tee -a "$out/measures.txt"
-# The same node with the kernel's `settle` (fw feature `settle`, a default one): what the
-# equaliser's state re-estimation adds to a size-optimised node with one backend, as a node
-# on a chain scene would carry it (`reference_node_settle_flash_added_bytes`).
-fwcargo build --profile board --no-default-features --features board,settle --bin reference_node
-sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_settle_" 0 \
-    | grep '_flash_bytes ' | tee -a "$out/measures.txt"
-python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
+# The same node with one more of the kernel's default features: what it adds to the
+# size-optimised node with one backend (`reference_node_FEATURE_flash_added_bytes`).
+reference_node_with() {
+    fwcargo build --profile board --no-default-features --features "board,$1" --bin reference_node
+    sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_$1_" 0 \
+        | grep '_flash_bytes ' | tee -a "$out/measures.txt"
+    python3 - "$out/measures.txt" "$1" <<'PY' | tee -a "$out/measures.txt"
 import sys
 m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
-print(f"reference_node_settle_flash_added_bytes "
-      f"{int(m['reference_node_settle_flash_bytes']) - int(m['reference_node_flash_bytes'])}")
+f = sys.argv[2]
+print(f"reference_node_{f}_flash_added_bytes "
+      f"{int(m[f'reference_node_{f}_flash_bytes']) - int(m['reference_node_flash_bytes'])}")
 PY
-# The same node with the kernel's `second_order` (fw feature `second_order`, a default one):
-# what taking the measurement's second-order biases out adds to the size-optimised node, which
-# leaves it out to fit its 32 KiB part (`reference_node_second_order_flash_added_bytes`).
-fwcargo build --profile board --no-default-features --features board,second_order \
-    --bin reference_node
-sizes "$target_dir/thumbv7em-none-eabihf/board/reference_node" "reference_node_second_order_" 0 \
-    | grep '_flash_bytes ' | tee -a "$out/measures.txt"
-python3 - "$out/measures.txt" <<'PY' | tee -a "$out/measures.txt"
-import sys
-m = dict(l.split()[:2] for l in open(sys.argv[1]) if len(l.split()) == 2)
-print(f"reference_node_second_order_flash_added_bytes "
-      f"{int(m['reference_node_second_order_flash_bytes']) - int(m['reference_node_flash_bytes'])}")
-PY
+}
+# `settle`: the equaliser's state re-estimation, as a node on a chain scene would carry it.
+reference_node_with settle
+# `second_order`: the measurement's second-order corrections, which the reference node leaves
+# out to fit its 32 KiB part.
+reference_node_with second_order
 
 section "plasticity: the yield feature (fw feature plasticity; kernel feature plasticity)"
 # Three more builds (the default ones above stay as they were and carry none of it):
