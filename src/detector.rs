@@ -1180,10 +1180,7 @@ impl<M: Backend> Detector<M> {
         #[cfg(not(feature = "second_order"))]
         let _ = floor;
         let b = self.baseline;
-        let value = |k: usize| {
-            let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
-            self.pre.get(i).copied().unwrap_or(0.0) - b
-        };
+        let value = |k: usize| self.pre_at(first, k) - b;
         let mut w = PreTrigger {
             old_sum: 0.0,
             #[cfg(feature = "second_order")]
@@ -1225,6 +1222,14 @@ impl<M: Backend> Detector<M> {
         self.baseline - self.alpha * window.steps / kept
     }
 
+    /// The `k`-th pre-trigger sample from ring slot `first` (the ring wraps; its length is a
+    /// power of two).
+    #[inline(always)]
+    fn pre_at(&self, first: usize, k: usize) -> f32 {
+        let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
+        self.pre.get(i).copied().unwrap_or(0.0)
+    }
+
     /// Starts a pulse with the pre-trigger samples, oldest first.
     #[cold]
     #[inline(never)]
@@ -1245,10 +1250,6 @@ impl<M: Backend> Detector<M> {
         p.release = self.release.max(0.5 * RING_SIGMAS * ring);
         let len = self.pre_next.wrapping_sub(self.pre_start).min(PRE_TRIGGER);
         let first = self.pre_next.wrapping_sub(len);
-        let at = |k: usize| {
-            let i = first.wrapping_add(k) & (PRE_TRIGGER - 1);
-            self.pre.get(i).copied().unwrap_or(0.0)
-        };
         let old = len / 2;
         // The oldest half of the pre-trigger samples: clear of the pulse's leading edge. Where
         // they sit at the baseline, the pre-trigger samples are the pulse's, and the baseline
@@ -1262,7 +1263,7 @@ impl<M: Backend> Detector<M> {
         }
         let mut old_sq = 0.0;
         for k in 0..len {
-            let w = at(k) - self.baseline;
+            let w = self.pre_at(first, k) - self.baseline;
             p.samples += 1;
             p.sum += w;
             p.sum_sq += w * w;
@@ -1571,12 +1572,13 @@ impl<M: Backend> Detector<M> {
 
     /// The pulse's sum of `samples` samples, `S`, with `ln S` made unbiased to second order in
     /// its noise: `E[ln S] = ln S_0 - var S / (2 S_0^2)`, so `S (1 + var S / (2 S^2))` with `var S
-    /// = noise^2 V(samples)` ([`Detector::sum_variance`]). The duration is the area over the
-    /// peak: at 9 noise RMS and 44 samples the bias of `ln t_c` it removes is -0.005.
+    /// = noise^2 samples`: it runs on a rigid chain only, whose noise is white. The duration is
+    /// the area over the peak: at 9 noise RMS and 44 samples the bias of `ln t_c` it removes is
+    /// -0.005.
     #[cfg(feature = "second_order")]
     fn unbiased_sum(&self, samples: f32) -> f32 {
         let sum = self.pulse.sum;
-        let var = self.noise * self.noise * self.sum_variance(samples);
+        let var = self.noise * self.noise * samples;
         if sum > 0.0 {
             sum + 0.5 * var / sum
         } else {

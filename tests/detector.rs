@@ -328,8 +328,9 @@ fn stream_ln_errors(rate_hz: f64, tc_s: f64, amp: f64, noise: f64, pulses: usize
 /// down to 10 noise sigmas, below a fifth of their sigmas: the fit's vertex bias, about `+2
 /// (sigma / F_max)^2` in `ln F_max` (+0.014 to +0.020 at 14-20 samples and 10 sigmas), and the
 /// sum's `-var / (2 S^2)` in `ln t_c` (with the vertex's, -0.032 to -0.036 there) are taken
-/// out (`PeakFit::vertex_bias`, the detector's unbiased sum; feature `second_order`). Printed only: below 8 samples per
-/// pulse (three samples, whose sampling error the model takes as its worst over phases).
+/// out (`PeakFit::vertex_bias`, the detector's unbiased sum; feature `second_order`). Printed
+/// only: below 8 samples per pulse (three samples, whose sampling error the model takes as its
+/// worst over phases).
 #[test]
 fn noise_model_matches_monte_carlo() {
     const PULSES: usize = 4000;
