@@ -1,7 +1,6 @@
 //! The bias a chain known only to a tolerance can leave in a measured pulse: the spread of the
-//! shift of `ln F_max` (and, opposite, of `ln t_c`) per pulse duration, which the classifier
-//! adds to the pulse's noise so that a chain given a few per cent off costs confidence, not
-//! the class.
+//! shifts of `ln F_max` and `ln t_c` per pulse duration, which the classifier adds to the
+//! pulse's noise so that a chain given a few per cent off costs confidence, not the class.
 //!
 //! The equaliser inverts the chain it is given, `H_k(s)`. When the true chain is `H(s)`, the
 //! force comes back as `F + e` with `e` the force filtered by `E = H / H_k - 1`. To first order
@@ -11,24 +10,35 @@
 //!
 //! with `S1(v) = int_{-1/2}^{1/2} cos^(3/2)(pi x) cos(v x) dx` the spectrum of the kernel's Hertz
 //! shape (`F^(2/3)` a half sine, see [`crate::detector`]) and `w_N = pi f_s`: the sampled pulse
-//! carries nothing above the Nyquist frequency. Every stage has unit gain at DC (`E(0) = 0`),
-//! so the pulse's area `C_AREA F_max t_c` does not move and `d ln t_c = -d ln F_max`.
+//! carries nothing above the Nyquist frequency. The duration is the pulse's sum over the
+//! detector's window over `C_AREA F_max`, the window `[a, b] t_c` about the peak with
+//! `a = -1/2 - before / (f_s t_c)` and `b = 1/2 + after / (f_s t_c)` ([`crate::pulse_window`]:
+//! the pre-trigger samples and the hold), so `d ln t_c = d ln A - d ln F_max` with
+//!
+//! `d ln A = (1 / pi) int_0^{w_N t_c} Re[E(jv / t_c) S1(v) (e^(jvb) - e^(jva)) / (jv)] dv / S1(0)`.
+//!
+//! Every stage has unit gain at DC (`E(0) = 0`): the whole area does not move. An
+//! accelerometer's error answers within the window, which keeps the area, and `d ln t_c` is
+//! close to `-d ln F_max`. A beam mode's error answers at the mode, far slower than the pulse:
+//! inside the window the pulse is rescaled (`d ln A` close to `d ln F_max`, `ln t_c` barely
+//! moves), and the area it keeps returns in the mode's ringing after the window. (Read as the
+//! area kept, `d ln t_c = -d ln F_max`, a beam mode's gain stated a spread of `ln u` three times
+//! what it does, and posteriors behind a chain given right were under-confident by 12 pp.)
 //!
 //! Each parameter of each stage (frequency, damping, and a beam mode's gain) is moved by
 //! `+-` its relative tolerance alone (the accelerometer's own, when the chain states one:
-//! [`ChainDynamics::accelerometer_tolerance`]), giving the larger `|d ln F_max|` of the two
-//! signs, `b_i`.
-//! Each parameter's error is taken as uniform within its tolerance and independent of the
-//! others, so the bias has the standard deviation `sqrt(sum_i b_i^2 / 3)` to first order: that
-//! is the figure the classifier adds to the pulse's noise. (The sum of the `b_i`, the worst
-//! corner, made posteriors on the scene's own chain far less sure than they are: a 0.85 stated
-//! where 0.99 held.) It is tabulated at
-//! [`POINTS`] durations spaced evenly in `ln t_c` over the scene's pulses, at build, and
-//! interpolated per pulse. The integral is a trapezoid rule in `v = w t_c` with step
-//! [`STEP_V`] up to [`MAX_V`] (`S1` falls as `v^(-5/2)`: the trapezoid of `S1` alone over that
-//! range is within 1e-4 of the exact 1); `E` is taken a half step right of the imaginary axis
-//! (`s = (0.5 STEP_V + j v) / t_c`), which smooths a mode's resonance narrower than the step
-//! into its integral instead of sampling its peak.
+//! [`ChainDynamics::accelerometer_tolerance`]), giving the shifts `b_+` and `b_-` of
+//! `(ln F_max, ln t_c)`. Each parameter's error is taken as uniform within its tolerance and
+//! independent of the others, and the shift as linear in it on either side, so the second
+//! moments are `sum_i (b_+ b_+^T + b_- b_-^T) / 6` ([`ChainSpread`]): that is what the
+//! classifier adds to the pulse's noise. (The sum of the worst shifts, the worst corner, made
+//! posteriors on the scene's own chain far less sure than they are: a 0.85 stated where 0.99
+//! held.) It is tabulated at [`POINTS`] durations spaced evenly in `ln t_c` over the scene's
+//! pulses, at build, and interpolated per pulse. The integrals are trapezoid rules in
+//! `v = w t_c` with step [`STEP_V`] up to [`MAX_V`] (`S1` falls as `v^(-5/2)`: the trapezoid of
+//! `S1` alone over that range is within 1e-4 of the exact 1); `E` is taken a half step right of
+//! the imaginary axis (`s = (0.5 STEP_V + j v) / t_c`), which smooths a mode's resonance
+//! narrower than the step into its integral instead of sampling its peak.
 
 use crate::complex::C;
 use crate::equaliser::{Accelerometer, BeamMode, ChainDynamics, ChainTolerance};
@@ -178,8 +188,68 @@ pub const HERTZ_SPECTRUM: [f32; 129] = [
     -0.00044501564,
 ];
 
-/// The tabulated spread of `d ln F_max` against `ln t_c`; [`ChainBias::NONE`] for a rigid
-/// chain or one known exactly.
+/// The second moments a chain's bias adds to a pulse's `(ln F_max, ln t_c)`: variances (log
+/// units squared) and covariance. Added to the measurement's own, they widen its noise
+/// ([`ChainSpread::widen`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ChainSpread {
+    /// Variance of `d ln F_max`.
+    pub var_ln_force: f32,
+    /// Variance of `d ln t_c`.
+    pub var_ln_duration: f32,
+    /// Covariance of the two.
+    pub cov_ln: f32,
+}
+
+impl ChainSpread {
+    /// No spread.
+    pub const ZERO: ChainSpread = ChainSpread {
+        var_ln_force: 0.0,
+        var_ln_duration: 0.0,
+        cov_ln: 0.0,
+    };
+
+    /// The standard deviation of `d ln F_max`.
+    ///
+    /// ```
+    /// use coalshock::chain_bias::ChainSpread;
+    /// let s = ChainSpread { var_ln_force: 4e-4, var_ln_duration: 0.0, cov_ln: 0.0 };
+    /// assert!((s.sigma_ln_force() - 0.02).abs() < 1e-7);
+    /// ```
+    pub fn sigma_ln_force(&self) -> f32 {
+        libm::sqrtf(self.var_ln_force.max(0.0))
+    }
+
+    /// The measurement's standard deviations `(sigma_ln_force, sigma_ln_duration)` and
+    /// covariance `cov_ln` with this spread added to their second moments:
+    /// `(sqrt(sF^2 + vF), sqrt(sT^2 + vT), c + cFT)`. A spread that is not finite adds
+    /// nothing.
+    ///
+    /// ```
+    /// use coalshock::chain_bias::ChainSpread;
+    /// use coalshock::math::Libm as M;
+    /// let s = ChainSpread { var_ln_force: 3e-4, var_ln_duration: 0.0, cov_ln: 0.0 };
+    /// let (f, t, c) = s.widen::<M>((0.01, 0.02, -1e-4));
+    /// assert!((f - 0.02).abs() < 1e-6 && t == 0.02 && c == -1e-4);
+    /// ```
+    pub fn widen<M: Backend>(&self, (sf, st, c): (f32, f32, f32)) -> (f32, f32, f32) {
+        let ok = self.var_ln_force.is_finite()
+            && self.var_ln_duration.is_finite()
+            && self.cov_ln.is_finite();
+        if !ok || *self == Self::ZERO {
+            return (sf, st, c);
+        }
+        (
+            M::sqrt(sf * sf + self.var_ln_force.max(0.0)),
+            M::sqrt(st * st + self.var_ln_duration.max(0.0)),
+            c + self.cov_ln,
+        )
+    }
+}
+
+/// The tabulated [`ChainSpread`] against `ln t_c`; [`ChainBias::NONE`] for a rigid chain or
+/// one known exactly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ChainBias {
@@ -187,8 +257,8 @@ pub struct ChainBias {
     ln_duration0: f32,
     /// Points per unit of `ln t_c`.
     points_per_ln: f32,
-    /// The spread at each point (0 everywhere for [`ChainBias::NONE`]).
-    bias_ln_force: [f32; POINTS],
+    /// The spread at each point ([`ChainSpread::ZERO`] everywhere for [`ChainBias::NONE`]).
+    points: [ChainSpread; POINTS],
 }
 
 impl ChainBias {
@@ -196,16 +266,18 @@ impl ChainBias {
     pub const NONE: ChainBias = ChainBias {
         ln_duration0: 0.0,
         points_per_ln: 0.0,
-        bias_ln_force: [0.0; POINTS],
+        points: [ChainSpread::ZERO; POINTS],
     };
 
     /// The spread for `dynamics` known to its [`ChainTolerance`], sampled at
-    /// `sample_rate_hz`, for pulses from `shortest_s` to `longest_s` (s).
+    /// `sample_rate_hz`, for pulses from `shortest_s` to `longest_s` (s) whose sums take
+    /// `window_samples = (before, after)` samples beyond the contact
+    /// ([`crate::pulse_window`]).
     pub fn new<M: Backend>(
         dynamics: &ChainDynamics,
         sample_rate_hz: f32,
-        shortest_s: f32,
-        longest_s: f32,
+        (shortest_s, longest_s): (f32, f32),
+        window_samples: (f32, f32),
     ) -> Self {
         let exact = dynamics.tolerance() == ChainTolerance::EXACT
             && (dynamics.accelerometer().is_none()
@@ -215,28 +287,36 @@ impl ChainBias {
         }
         let (l0, l1) = (M::ln(shortest_s), M::ln(longest_s.max(shortest_s)));
         let span = (l1 - l0) / (POINTS - 1) as f32;
-        let mut bias_ln_force = [0.0; POINTS];
-        for (i, b) in bias_ln_force.iter_mut().enumerate() {
+        let mut points = [ChainSpread::ZERO; POINTS];
+        for (i, p) in points.iter_mut().enumerate() {
             let t_c = M::exp(l0 + span * i as f32);
-            *b = bound_at(dynamics, sample_rate_hz, t_c);
+            *p = spread_at(dynamics, sample_rate_hz, t_c, window_samples);
         }
         Self {
             ln_duration0: l0,
             points_per_ln: if span > 0.0 { 1.0 / span } else { 0.0 },
-            bias_ln_force,
+            points,
         }
     }
 
-    /// The spread of `d ln F_max` for a pulse of `ln t_c` (t_c in s), linear in `ln t_c`
-    /// between the points and held beyond them; 0 for [`ChainBias::NONE`].
-    pub fn bias_ln_force(&self, ln_duration: f32) -> f32 {
+    /// The spread for a pulse of `ln t_c` (t_c in s), each moment linear in `ln t_c` between
+    /// the points and held beyond them; [`ChainSpread::ZERO`] for [`ChainBias::NONE`].
+    pub fn spread(&self, ln_duration: f32) -> ChainSpread {
         let at = (ln_duration - self.ln_duration0) * self.points_per_ln;
-        math::interpolate(&self.bias_ln_force, math::table_position(at, POINTS))
+        let (i, f) = math::table_position(at, POINTS);
+        let point = |k: usize| self.points.get(k).copied().unwrap_or(ChainSpread::ZERO);
+        let (a, b) = (point(i), point(i + 1));
+        let lerp = |x: f32, y: f32| x + (y - x) * f;
+        ChainSpread {
+            var_ln_force: lerp(a.var_ln_force, b.var_ln_force),
+            var_ln_duration: lerp(a.var_ln_duration, b.var_ln_duration),
+            cov_ln: lerp(a.cov_ln, b.cov_ln),
+        }
     }
 
     /// The spread at each tabulated point, from the shortest pulse to the longest.
-    pub fn points(&self) -> &[f32; POINTS] {
-        &self.bias_ln_force
+    pub fn points(&self) -> &[ChainSpread; POINTS] {
+        &self.points
     }
 }
 
@@ -288,15 +368,52 @@ fn mv(k: usize, tol: ChainTolerance) -> (f32, f32, f32) {
     }
 }
 
-/// The standard deviation of `d ln F_max` for one pulse duration `t_c` (s): the module's
-/// integral for every stage and move, `sqrt(sum_i b_i^2 / 3)` over parameters.
+/// A move's first-order shifts `(d ln F_max, d ln A)` (peak, and the sum over the window),
+/// accumulated over the integral's points.
+type Shift = [[(f32, f32); MOVES]; crate::equaliser::MAX_MODES + 1];
+
+/// The [`ChainSpread`] for one pulse duration `t_c` (s) whose sum spans `window_samples`
+/// samples beyond the contact: the module's integrals for every stage and move, each move's
+/// `(d ln F_max, d ln t_c = d ln A - d ln F_max)` taken as the shift at its parameter's
+/// tolerance, the error uniform within it (`E[b b^T] = (b_+ b_+^T + b_- b_-^T) / 6` of the two
+/// signs' shifts), summed over parameters.
 // Not inlined: a rigid scene's build never calls it and must not carry its frame.
 #[inline(never)]
-fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
+fn spread_at(
+    d: &ChainDynamics,
+    sample_rate_hz: f32,
+    t_c: f32,
+    window_samples: (f32, f32),
+) -> ChainSpread {
+    let shifts = shifts_at(d, sample_rate_hz, t_c, window_samples);
+    let mut s = ChainSpread::ZERO;
+    for &(df, da) in shifts.iter().flatten() {
+        let dt = da - df;
+        s.var_ln_force += df * df / 6.0;
+        s.var_ln_duration += dt * dt / 6.0;
+        s.cov_ln += df * dt / 6.0;
+    }
+    let finite =
+        s.var_ln_force.is_finite() && s.var_ln_duration.is_finite() && s.cov_ln.is_finite();
+    if finite { s } else { ChainSpread::ZERO }
+}
+
+/// Every stage's and move's `(d ln F_max, d ln A)` for a pulse of `t_c` (s): the module's two
+/// integrals, the window `[a, b] t_c` about the peak with `a = -1/2 - before / (f_s t_c)`,
+/// `b = 1/2 + after / (f_s t_c)`.
+fn shifts_at(
+    d: &ChainDynamics,
+    sample_rate_hz: f32,
+    t_c: f32,
+    (before, after): (f32, f32),
+) -> Shift {
     let (tol, acc_tol) = (d.tolerance(), d.accelerometer_tolerance());
     let v_top = (core::f32::consts::PI * sample_rate_hz * t_c).min(MAX_V);
+    let samples = sample_rate_hz * t_c;
+    let (a, b) = (-0.5 - before / samples, 0.5 + after / samples);
+    let area = HERTZ_SPECTRUM[0];
     // [stage][move]: modes, then the accelerometer.
-    let mut sums = [[0.0f32; MOVES]; crate::equaliser::MAX_MODES + 1];
+    let mut sums: Shift = [[(0.0, 0.0); MOVES]; crate::equaliser::MAX_MODES + 1];
     for (k, &weight) in HERTZ_SPECTRUM.iter().enumerate() {
         let v = k as f32 * STEP_V;
         if v > v_top {
@@ -308,11 +425,16 @@ fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
             1.0
         };
         let w = weight * trapezoid * STEP_V / core::f32::consts::PI;
+        let window = window_term(v, a, b).scale(w / area);
+        // The error's response `e = E - 1` weighed by the peak's `w` and the window's.
+        let add = |sum: &mut (f32, f32), e: C| {
+            sum.0 += e.re * w;
+            sum.1 += e.mul(window).re;
+        };
         let s = C::new(0.5 * STEP_V / t_c, v / t_c);
         let mut beam = C::new(1.0, 0.0);
         for m in d.modes() {
-            let t = mode_term(s, m);
-            beam = C::new(beam.re + t.re, beam.im + t.im);
+            beam = beam.add(mode_term(s, m));
         }
         for (m, row) in d.modes().iter().zip(sums.iter_mut()) {
             let t = mode_term(s, m);
@@ -323,28 +445,34 @@ fn bound_at(d: &ChainDynamics, sample_rate_hz: f32, t_c: f32) -> f32 {
                     damping_ratio: m.damping_ratio * (1.0 + dz),
                     gain: m.gain * (1.0 + dg),
                 };
-                *sum += mode_term(s, &moved).sub(t).div(beam).re * w;
+                add(sum, mode_term(s, &moved).sub(t).div(beam));
             }
         }
-        if let (Some(a), Some(row)) = (d.accelerometer(), sums.last_mut()) {
-            let t = accelerometer_term(s, &a);
+        if let (Some(acc), Some(row)) = (d.accelerometer(), sums.last_mut()) {
+            let t = accelerometer_term(s, &acc);
             for (j, sum) in row.iter_mut().enumerate().take(4) {
                 let (df, dz, _) = mv(j, acc_tol);
                 let moved = Accelerometer {
-                    frequency_hz: a.frequency_hz * (1.0 + df),
-                    damping_ratio: a.damping_ratio * (1.0 + dz),
+                    frequency_hz: acc.frequency_hz * (1.0 + df),
+                    damping_ratio: acc.damping_ratio * (1.0 + dz),
                 };
-                *sum += accelerometer_term(s, &moved).div(t).re * w - w;
+                add(
+                    sum,
+                    accelerometer_term(s, &moved).div(t).sub(C::new(1.0, 0.0)),
+                );
             }
         }
     }
-    // Sum over parameters of `b_i^2`, `b_i` the larger move of the two signs.
-    let squares = |row: &[f32; MOVES]| {
-        row.chunks_exact(2)
-            .map(|pair| pair.iter().fold(0.0f32, |a, v| a.max(v.abs())))
-            .map(|b| b * b)
-            .sum::<f32>()
-    };
-    let total = libm::sqrtf(sums.iter().map(squares).sum::<f32>() / 3.0);
-    if total.is_finite() { total } else { 0.0 }
+    sums
+}
+
+/// The window's weight at `v = w t_c` for the window `[a, b] t_c`: `(e^(j v b) - e^(j v a)) / (j v)`
+/// (`b - a` at `v = 0`), the conjugate of its spectrum over `t_c`.
+fn window_term(v: f32, a: f32, b: f32) -> C {
+    if v == 0.0 {
+        return C::new(b - a, 0.0);
+    }
+    let (sb, cb) = math::sin_cos_any(v * b);
+    let (sa, ca) = math::sin_cos_any(v * a);
+    C::new((sb - sa) / v, -(cb - ca) / v)
 }

@@ -1,5 +1,6 @@
 //! From a measured pulse `(F_max, t_c)` to a verdict against the scene's class envelopes.
 
+use crate::chain_bias::ChainSpread;
 use crate::envelope::{Envelope, Inverted, NoiseXy, Side};
 use crate::math::Backend;
 use crate::scene::Scene;
@@ -176,9 +177,9 @@ struct PulsePoint {
     sf: f32,
     st: f32,
     cov: f32,
-    /// That noise, and widened by the chain's `bias` of `ln F_max`.
+    /// That noise, and widened by the chain's spread.
     noise: NoiseXy,
-    bias: f32,
+    chain: ChainSpread,
     wide: NoiseXy,
 }
 
@@ -236,7 +237,7 @@ fn read_noise(
 /// point's.
 #[inline(always)]
 fn class_noise<M: Backend>(env: &Envelope, p: &PulsePoint) -> (NoiseXy, NoiseXy) {
-    env.bent_noise::<M>((p.lf, p.lt), (p.sf, p.st, p.cov), p.bias)
+    env.bent_noise::<M>((p.lf, p.lt), (p.sf, p.st, p.cov), &p.chain)
         .unwrap_or((p.noise, p.wide))
 }
 
@@ -337,8 +338,9 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         // with its opposite in `ln t_c` (the model's tolerance does not).
         let cov = finite_or(m.cov_ln).max(-(sf * st)).min(sf * st);
         let noise = NoiseXy::new::<M>(sf, st, cov);
-        let bias = self.chain_bias().bias_ln_force(lt);
-        let wide = noise.with_chain_bias::<M>(bias);
+        let chain = self.chain_bias().spread(lt);
+        let (wf, wt, wc) = chain.widen::<M>((sf, st, cov));
+        let wide = NoiseXy::new::<M>(wf, wt, wc);
         PulsePoint {
             lf,
             lt,
@@ -346,7 +348,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
             st,
             cov,
             noise,
-            bias,
+            chain,
             wide,
         }
     }

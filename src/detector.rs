@@ -115,12 +115,12 @@ use crate::math::{Backend, DefaultBackend};
 use crate::noise_colour::NoiseColour;
 #[cfg(feature = "pulse_shape")]
 use crate::pulse_shape::{PulseShape, shape_flank_fit};
+use crate::pulse_window::hold_samples;
 use crate::scene::{ContactCalibration, Scene};
 #[cfg(feature = "pulse_shape")]
 use crate::short_pulse::{SHORT_SAMPLES, short_shape_fit};
 
-/// Samples kept before the trigger and added to the pulse.
-pub const PRE_TRIGGER: usize = 32;
+pub use crate::pulse_window::PRE_TRIGGER;
 
 pub use crate::shape_fit::{
     C_AREA, C_ENERGY, FlankChain, FlankFit, Flanks, PEAK_OMEGA, PeakFit, flank_fit, peak_fit,
@@ -640,9 +640,7 @@ impl<M: Backend> Detector<M> {
         let s = scene.settings();
         let fs = sensor.sample_rate_hz;
         let (short, long) = scene.duration_bounds_s();
-        let hold = (0.05 * short * fs)
-            .max(s.hold_samples as f32)
-            .min(u16::MAX as f32) as u16;
+        let hold = hold_samples(s.hold_samples, short, fs);
         let max_samples =
             (3.0 * long * fs + PRE_TRIGGER as f32 + hold as f32).min(u32::MAX as f32 / 2.0) as u32;
         // The equaliser colours and scales the ADC's white noise by its noise gain.

@@ -16,6 +16,7 @@
 //! Priors: `R` log-uniform on `[R0, R1]`; `u` with density `p(u) ~ u^(beta - 1)` on `[u0, u1]`
 //! (`beta = 1`: uniform speed; `beta = 2`: uniform drop height, `u = sqrt(2 g h)`).
 
+use crate::chain_bias::ChainSpread;
 use crate::error::{Error, positive, representable};
 use crate::hertz::CONTACT_TIME_FACTOR;
 use crate::math::{self, Backend};
@@ -140,22 +141,6 @@ impl NoiseXy {
 }
 
 impl NoiseXy {
-    /// The noise widened by a bias `b` of `ln F_max` that comes with `-b` of `ln t_c` (a
-    /// pulse's area kept, as a chain's tolerance leaves it: [`crate::chain_bias`]): it moves
-    /// `(ln R, ln u)` by `(-5/8 b, 15/8 b)`, added in quadrature to each.
-    pub fn with_chain_bias<M: Backend>(self, bias_ln_force: f32) -> Self {
-        if bias_ln_force <= 0.0 || !bias_ln_force.is_finite() {
-            return self;
-        }
-        let (bx, by) = (0.625 * bias_ln_force, 1.875 * bias_ln_force);
-        Self {
-            sigma_x: clamp_sigma(M::sqrt(self.sigma_x * self.sigma_x + bx * bx)),
-            sigma_y: clamp_sigma(M::sqrt(self.sigma_y * self.sigma_y + by * by)),
-        }
-    }
-}
-
-impl NoiseXy {
     /// From the standard deviations of `ln F_max` and `ln t_c` and their covariance `c`
     /// through a bent class's map at a point with slopes `l` ([`Local`]):
     /// `dx = dx_A d ln F + dx_B d ln t` (likewise `y`), so
@@ -174,23 +159,6 @@ impl NoiseXy {
         Self {
             sigma_x: clamp_sigma(M::sqrt(var(l.dx))),
             sigma_y: clamp_sigma(M::sqrt(var(l.dy))),
-        }
-    }
-
-    /// [`NoiseXy::with_chain_bias`] through a bent class's map: the bias `(b, -b)` of
-    /// `(ln F_max, ln t_c)` moves `(ln R, ln u)` by `((dx_A - dx_B) b, (dy_A - dy_B) b)`
-    /// (`(-5/8 b, 15/8 b)` for Hertz).
-    pub fn with_bias_through<M: Backend>(self, bias_ln_force: f32, l: Local) -> Self {
-        if bias_ln_force <= 0.0 || !bias_ln_force.is_finite() {
-            return self;
-        }
-        let (bx, by) = (
-            (l.dx.0 - l.dx.1) * bias_ln_force,
-            (l.dy.0 - l.dy.1) * bias_ln_force,
-        );
-        Self {
-            sigma_x: clamp_sigma(M::sqrt(self.sigma_x * self.sigma_x + bx * bx)),
-            sigma_y: clamp_sigma(M::sqrt(self.sigma_y * self.sigma_y + by * by)),
         }
     }
 }
@@ -339,22 +307,22 @@ impl Envelope {
 
     /// The measurement noise `(sigma_ln_force, sigma_ln_duration, cov_ln)` carried into this bent
     /// class's `(ln R, ln u)` at the point `(ln_force, ln_duration)` maps to, and the same
-    /// widened by a chain's bias `bias_ln_force` ([`NoiseXy::through`],
-    /// [`NoiseXy::with_bias_through`]); `None` for a Hertz envelope (the caller's
-    /// [`NoiseXy::new`] holds).
+    /// widened by a chain's spread `chain` ([`NoiseXy::through`], [`ChainSpread::widen`]);
+    /// `None` for a Hertz envelope (the caller's [`NoiseXy::new`] holds).
     #[inline(never)]
     pub fn bent_noise<M: Backend>(
         &self,
         (ln_force, ln_duration): (f32, f32),
         (sigma_ln_force, sigma_ln_duration, cov_ln): (f32, f32, f32),
-        bias_ln_force: f32,
+        chain: &ChainSpread,
     ) -> Option<(NoiseXy, NoiseXy)> {
         let map = self.bent()?;
         let a = ln_force - self.ln_force_coeff;
         let b = ln_duration - self.ln_duration_coeff;
         let l = map.local(map.invert(a, b).2);
         let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, cov_ln, l);
-        Some((noise, noise.with_bias_through::<M>(bias_ln_force, l)))
+        let (wf, wt, wc) = chain.widen::<M>((sigma_ln_force, sigma_ln_duration, cov_ln));
+        Some((noise, NoiseXy::through::<M>(wf, wt, wc, l)))
     }
 
     /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s; a bent class adds

@@ -28,6 +28,7 @@ pub mod monitor;
 pub mod noise_colour;
 #[cfg(feature = "pulse_shape")]
 pub mod pulse_shape;
+pub mod pulse_window;
 pub mod ratio_map;
 pub mod sampled;
 pub mod sampled_phase;

@@ -13,6 +13,7 @@ use crate::material::{Material, effective_modulus_pa};
 use crate::math::{Backend, DefaultBackend};
 #[cfg(feature = "pulse_shape")]
 pub use crate::pulse_shape::PulseShape;
+use crate::pulse_window::{PRE_TRIGGER, hold_samples};
 use crate::ratio_map::RatioMap;
 pub use crate::sampled::{SAMPLED_FIRST_N, SAMPLED_POINTS, SAMPLED_STEP, SampledCalibration};
 pub use crate::sampled_phase::SampledPhase;
@@ -466,8 +467,12 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         }
         relative_to_largest(&mut ln_priors);
         durations_measurable(shortest, longest, sensor.sample_rate_hz, &settings)?;
-        let chain_bias =
-            ChainBias::new::<M>(&sensor.dynamics, sensor.sample_rate_hz, shortest, longest);
+        let fs = sensor.sample_rate_hz;
+        let window = (
+            PRE_TRIGGER as f32,
+            hold_samples(settings.hold_samples, shortest, fs) as f32,
+        );
+        let chain_bias = ChainBias::new::<M>(&sensor.dynamics, fs, (shortest, longest), window);
         let mut scene = Self {
             plate,
             classes: stored,

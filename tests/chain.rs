@@ -594,7 +594,9 @@ fn the_accelerometer_tolerance_applies_to_the_accelerometer_alone() {
     };
     let bias = |d: ChainDynamics| {
         let d = d.designed::<coalshock::math::DefaultBackend>(fs).unwrap();
-        *ChainBias::new::<coalshock::math::DefaultBackend>(&d, fs, 114e-6, 457e-6).points()
+        ChainBias::new::<coalshock::math::DefaultBackend>(&d, fs, (114e-6, 457e-6), (32.0, 2.0))
+            .points()
+            .map(|s| s.sigma_ln_force())
     };
     let whole = with_modes(ChainDynamics::RIGID.with_accelerometer(band))
         .with_tolerance(beam)

@@ -6,6 +6,7 @@
 
 mod common;
 
+use coalshock::chain_bias::ChainSpread;
 use coalshock::math::Libm;
 use coalshock::{ChainBias, ChainTolerance};
 use host_sim::convert::sensor_to_kernel;
@@ -52,7 +53,16 @@ fn bound(believed: &SensorSpec, tolerance: ChainTolerance, duration_s: f64) -> f
         .with_tolerance(tolerance)
         .unwrap();
     let t = duration_s as f32;
-    ChainBias::new::<Libm>(&dynamics, FS as f32, t, t).bias_ln_force(t.ln()) as f64
+    chain_spread(&dynamics, t).sigma_ln_force() as f64
+}
+
+/// The kernel's spread at one duration, the sum's window as the detector's at `FS`.
+fn chain_spread(dynamics: &coalshock::ChainDynamics, t: f32) -> ChainSpread {
+    let window = (
+        coalshock::pulse_window::PRE_TRIGGER as f32,
+        coalshock::pulse_window::hold_samples(2, t, FS as f32) as f32,
+    );
+    ChainBias::new::<Libm>(dynamics, FS as f32, (t, t), window).spread(t.ln())
 }
 
 /// Largest `|d ln F_max|` over the two signs of one relative move, and the largest
@@ -121,6 +131,127 @@ fn beam_mode_gains_move_the_peak_as_bounded() {
         println!("t_c {duration_s:.1e}: measured {d_force:.4}, bound {b:.4}");
         assert!((d_force / b - 1.0).abs() < 0.25, "{d_force} against {b}");
     }
+}
+
+/// `(ln F_max, ln t_c)` of the pulse of `duration_s` through `truth`, equalised for
+/// `believed`, as the detector reads them: the peak from a parabola through the top three
+/// samples, the duration the sum over the detector's window (the contact, the
+/// [`coalshock::pulse_window::PRE_TRIGGER`] samples before it and the hold after it, about
+/// the largest sample) over `C_AREA F_max`, up to a constant.
+fn windowed_ln(truth: &SensorSpec, believed: &SensorSpec, duration_s: f64) -> (f64, f64) {
+    let n = (0.006 * FS) as usize;
+    let (out, _) =
+        common::equalised_hertz_pulse(truth, believed, (0.002, duration_s, PEAK_COUNTS), n);
+    let out: Vec<f64> = out.iter().map(|&v| v as f64).collect();
+    let i = (1..n - 1).fold(1, |b, i| if out[i] > out[b] { i } else { b });
+    let (a, b, c) = (out[i - 1], out[i], out[i + 1]);
+    let peak = b + 0.125 * (a - c) * (a - c) / (2.0 * b - a - c);
+    let half = 0.5 * duration_s * FS;
+    let hold = coalshock::pulse_window::hold_samples(2, duration_s as f32, FS as f32) as f64;
+    let lo = (i as f64 - half - coalshock::pulse_window::PRE_TRIGGER as f64).round() as usize;
+    let hi = (i as f64 + half + hold).round() as usize;
+    let area = out[lo..=hi].iter().sum::<f64>();
+    (peak.ln(), (area / peak).ln())
+}
+
+/// The second moments of `(d ln F_max, d ln t_c)` over one parameter's error uniform within
+/// `+-step`, measured at the two ends: `(b_+ b_+^T + b_- b_-^T) / 6`.
+fn measured_moments(
+    believed: &SensorSpec,
+    moved: impl Fn(f64) -> SensorSpec,
+    step: f64,
+    duration_s: f64,
+) -> [f64; 3] {
+    let (f0, t0) = windowed_ln(believed, believed, duration_s);
+    let mut m = [0.0; 3];
+    for sign in [1.0, -1.0] {
+        let (f, t) = windowed_ln(&moved(sign * step), believed, duration_s);
+        let (df, dt) = (f - f0, t - t0);
+        m[0] += df * df / 6.0;
+        m[1] += dt * dt / 6.0;
+        m[2] += df * dt / 6.0;
+    }
+    m
+}
+
+#[test]
+fn beam_mode_gains_move_the_peak_not_the_duration() {
+    // A beam mode's error leaves the pulse rescaled inside the detector's window and returns
+    // the area it keeps in the mode's slow ringing after it: `ln t_c` moves far less than
+    // `ln F_max`, not opposite to it.
+    let modes = [(180.0, 0.02, 0.1), (650.0, 0.01, 0.05), (2100.0, 0.02, 0.1)];
+    let tol = ChainTolerance {
+        frequency: 0.0,
+        damping: 0.0,
+        gain: 0.2,
+    };
+    for duration_s in [1.5e-4, 3e-4, 5e-4] {
+        let believed = spec(&modes, None);
+        let mut m = [0.0; 3];
+        for i in 0..modes.len() {
+            let moved = |r: f64| {
+                let mut ms = modes.to_vec();
+                ms[i].2 *= 1.0 + r;
+                spec(&ms, None)
+            };
+            let d = measured_moments(&believed, moved, tol.gain as f64, duration_s);
+            (0..3).for_each(|k| m[k] += d[k]);
+        }
+        let corr = check_spread(&believed, tol, duration_s, m);
+        // The area-kept reading (r = -1, sT = sF) is wrong for beam modes.
+        assert!(corr > -0.7 && m[1] < 0.64 * m[0], "r {corr}, moments {m:?}");
+    }
+}
+
+#[test]
+fn accelerometer_damping_moves_the_duration_opposite_to_the_peak() {
+    // The accelerometer's error answers within the window, which keeps the area.
+    let (f, z) = (6300.0, 0.7);
+    let tol = ChainTolerance {
+        frequency: 0.0,
+        damping: 0.3,
+        gain: 0.0,
+    };
+    for duration_s in [1.5e-4, 3e-4, 5e-4] {
+        let believed = spec(&[], Some((f, z)));
+        let moved = |r: f64| spec(&[], Some((f, z * (1.0 + r))));
+        let m = measured_moments(&believed, moved, tol.damping as f64, duration_s);
+        let corr = check_spread(&believed, tol, duration_s, m);
+        assert!(corr < -0.9, "r {corr}");
+    }
+}
+
+/// Asserts the kernel's spread for `believed` known to `tolerance` at `duration_s` against
+/// the measured moments `m` (`[var F, var T, cov]`): each standard deviation within 25 %
+/// (`ln t_c`'s within a tenth of `ln F_max`'s beside), the correlation within 0.15. Returns
+/// the measured correlation.
+fn check_spread(
+    believed: &SensorSpec,
+    tolerance: ChainTolerance,
+    duration_s: f64,
+    m: [f64; 3],
+) -> f64 {
+    let dynamics = sensor_to_kernel(believed)
+        .unwrap()
+        .dynamics
+        .with_tolerance(tolerance)
+        .unwrap();
+    let s = chain_spread(&dynamics, duration_s as f32);
+    let (sf, st) = (m[0].sqrt(), m[1].sqrt());
+    let kf = (s.var_ln_force as f64).sqrt();
+    let kt = (s.var_ln_duration as f64).sqrt();
+    let (corr, kcorr) = (m[2] / (sf * st), s.cov_ln as f64 / (kf * kt));
+    println!(
+        "t_c {duration_s:.1e}: measured sF {sf:.4} sT {st:.4} r {corr:+.2}; \
+         kernel {kf:.4} {kt:.4} {kcorr:+.2}"
+    );
+    assert!((kf / sf - 1.0).abs() < 0.25, "sF {kf} against {sf}");
+    assert!(
+        (kt - st).abs() < 0.25 * st + 0.1 * sf,
+        "sT {kt} against {st}"
+    );
+    assert!((kcorr - corr).abs() < 0.15, "r {kcorr} against {corr}");
+    corr
 }
 
 #[test]
