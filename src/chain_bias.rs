@@ -40,7 +40,7 @@
 //! the imaginary axis (`s = (0.5 STEP_V + j v) / t_c`), which smooths a mode's resonance
 //! narrower than the step into its integral instead of sampling its peak.
 
-use crate::complex::C;
+use crate::complex::{C, cis};
 use crate::equaliser::{Accelerometer, BeamMode, ChainDynamics, ChainTolerance};
 use crate::math::{self, Backend};
 
@@ -190,7 +190,7 @@ pub const HERTZ_SPECTRUM: [f32; 129] = [
 
 /// The second moments a chain's bias adds to a pulse's `(ln F_max, ln t_c)`: variances (log
 /// units squared) and covariance. Added to the measurement's own, they widen its noise
-/// ([`ChainSpread::widen`]).
+/// (the envelope's `NoiseXy::with_chain`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ChainSpread {
@@ -220,32 +220,6 @@ impl ChainSpread {
     pub fn sigma_ln_force(&self) -> f32 {
         libm::sqrtf(self.var_ln_force.max(0.0))
     }
-
-    /// The measurement's standard deviations `(sigma_ln_force, sigma_ln_duration)` and
-    /// covariance `cov_ln` with this spread added to their second moments:
-    /// `(sqrt(sF^2 + vF), sqrt(sT^2 + vT), c + cFT)`. A spread that is not finite adds
-    /// nothing.
-    ///
-    /// ```
-    /// use coalshock::chain_bias::ChainSpread;
-    /// use coalshock::math::Libm as M;
-    /// let s = ChainSpread { var_ln_force: 3e-4, var_ln_duration: 0.0, cov_ln: 0.0 };
-    /// let (f, t, c) = s.widen::<M>((0.01, 0.02, -1e-4));
-    /// assert!((f - 0.02).abs() < 1e-6 && t == 0.02 && c == -1e-4);
-    /// ```
-    pub fn widen<M: Backend>(&self, (sf, st, c): (f32, f32, f32)) -> (f32, f32, f32) {
-        let ok = self.var_ln_force.is_finite()
-            && self.var_ln_duration.is_finite()
-            && self.cov_ln.is_finite();
-        if !ok || *self == Self::ZERO {
-            return (sf, st, c);
-        }
-        (
-            M::sqrt(sf * sf + self.var_ln_force.max(0.0)),
-            M::sqrt(st * st + self.var_ln_duration.max(0.0)),
-            c + self.cov_ln,
-        )
-    }
 }
 
 /// The tabulated [`ChainSpread`] against `ln t_c`; [`ChainBias::NONE`] for a rigid chain or
@@ -257,8 +231,9 @@ pub struct ChainBias {
     ln_duration0: f32,
     /// Points per unit of `ln t_c`.
     points_per_ln: f32,
-    /// The spread at each point ([`ChainSpread::ZERO`] everywhere for [`ChainBias::NONE`]).
-    points: [ChainSpread; POINTS],
+    /// The spread's moments at each point (0 everywhere for [`ChainBias::NONE`]):
+    /// `var_ln_force`, `var_ln_duration`, `cov_ln`.
+    moments: [[f32; POINTS]; 3],
 }
 
 impl ChainBias {
@@ -266,7 +241,7 @@ impl ChainBias {
     pub const NONE: ChainBias = ChainBias {
         ln_duration0: 0.0,
         points_per_ln: 0.0,
-        points: [ChainSpread::ZERO; POINTS],
+        moments: [[0.0; POINTS]; 3],
     };
 
     /// The spread for `dynamics` known to its [`ChainTolerance`], sampled at
@@ -287,15 +262,17 @@ impl ChainBias {
         }
         let (l0, l1) = (M::ln(shortest_s), M::ln(longest_s.max(shortest_s)));
         let span = (l1 - l0) / (POINTS - 1) as f32;
-        let mut points = [ChainSpread::ZERO; POINTS];
-        for (i, p) in points.iter_mut().enumerate() {
+        let mut moments = [[0.0; POINTS]; 3];
+        let [f, t, c] = &mut moments;
+        for (i, ((f, t), c)) in f.iter_mut().zip(t.iter_mut()).zip(c.iter_mut()).enumerate() {
             let t_c = M::exp(l0 + span * i as f32);
-            *p = spread_at(dynamics, sample_rate_hz, t_c, window_samples);
+            let p = spread_at(dynamics, sample_rate_hz, t_c, window_samples);
+            (*f, *t, *c) = (p.var_ln_force, p.var_ln_duration, p.cov_ln);
         }
         Self {
             ln_duration0: l0,
             points_per_ln: if span > 0.0 { 1.0 / span } else { 0.0 },
-            points,
+            moments,
         }
     }
 
@@ -303,20 +280,23 @@ impl ChainBias {
     /// the points and held beyond them; [`ChainSpread::ZERO`] for [`ChainBias::NONE`].
     pub fn spread(&self, ln_duration: f32) -> ChainSpread {
         let at = (ln_duration - self.ln_duration0) * self.points_per_ln;
-        let (i, f) = math::table_position(at, POINTS);
-        let point = |k: usize| self.points.get(k).copied().unwrap_or(ChainSpread::ZERO);
-        let (a, b) = (point(i), point(i + 1));
-        let lerp = |x: f32, y: f32| x + (y - x) * f;
+        let at = math::table_position(at, POINTS);
+        let [f, t, c] = &self.moments;
         ChainSpread {
-            var_ln_force: lerp(a.var_ln_force, b.var_ln_force),
-            var_ln_duration: lerp(a.var_ln_duration, b.var_ln_duration),
-            cov_ln: lerp(a.cov_ln, b.cov_ln),
+            var_ln_force: math::interpolate(f, at),
+            var_ln_duration: math::interpolate(t, at),
+            cov_ln: math::interpolate(c, at),
         }
     }
 
     /// The spread at each tabulated point, from the shortest pulse to the longest.
-    pub fn points(&self) -> &[ChainSpread; POINTS] {
-        &self.points
+    pub fn points(&self) -> [ChainSpread; POINTS] {
+        let [f, t, c] = &self.moments;
+        core::array::from_fn(|i| ChainSpread {
+            var_ln_force: f.get(i).copied().unwrap_or(0.0),
+            var_ln_duration: t.get(i).copied().unwrap_or(0.0),
+            cov_ln: c.get(i).copied().unwrap_or(0.0),
+        })
     }
 }
 
@@ -412,6 +392,8 @@ fn shifts_at(
     let samples = sample_rate_hz * t_c;
     let (a, b) = (-0.5 - before / samples, 0.5 + after / samples);
     let area = HERTZ_SPECTRUM[0];
+    let (turn_a, turn_b) = (cis(STEP_V * a), cis(STEP_V * b));
+    let (mut at_a, mut at_b) = (C::new(1.0, 0.0), C::new(1.0, 0.0));
     // [stage][move]: modes, then the accelerometer.
     let mut sums: Shift = [[(0.0, 0.0); MOVES]; crate::equaliser::MAX_MODES + 1];
     for (k, &weight) in HERTZ_SPECTRUM.iter().enumerate() {
@@ -425,19 +407,28 @@ fn shifts_at(
             1.0
         };
         let w = weight * trapezoid * STEP_V / core::f32::consts::PI;
-        let window = window_term(v, a, b).scale(w / area);
+        // `(e^(jvb) - e^(jva)) / (jv)`: the exponentials by one rotation per step.
+        let window = if k == 0 {
+            C::new(b - a, 0.0)
+        } else {
+            C::new(0.0, -1.0 / v).mul(at_b.sub(at_a))
+        }
+        .scale(w / area);
+        (at_a, at_b) = (at_a.mul(turn_a), at_b.mul(turn_b));
         // The error's response `e = E - 1` weighed by the peak's `w` and the window's.
         let add = |sum: &mut (f32, f32), e: C| {
             sum.0 += e.re * w;
             sum.1 += e.mul(window).re;
         };
         let s = C::new(0.5 * STEP_V / t_c, v / t_c);
+        let mut terms = [C::new(0.0, 0.0); crate::equaliser::MAX_MODES];
         let mut beam = C::new(1.0, 0.0);
-        for m in d.modes() {
-            beam = beam.add(mode_term(s, m));
+        for (m, t) in d.modes().iter().zip(terms.iter_mut()) {
+            *t = mode_term(s, m);
+            beam = beam.add(*t);
         }
-        for (m, row) in d.modes().iter().zip(sums.iter_mut()) {
-            let t = mode_term(s, m);
+        let per_beam = C::new(1.0, 0.0).div(beam);
+        for ((m, &t), row) in d.modes().iter().zip(terms.iter()).zip(sums.iter_mut()) {
             for (j, sum) in row.iter_mut().enumerate() {
                 let (df, dz, dg) = mv(j, tol);
                 let moved = BeamMode {
@@ -445,11 +436,11 @@ fn shifts_at(
                     damping_ratio: m.damping_ratio * (1.0 + dz),
                     gain: m.gain * (1.0 + dg),
                 };
-                add(sum, mode_term(s, &moved).sub(t).div(beam));
+                add(sum, mode_term(s, &moved).sub(t).mul(per_beam));
             }
         }
         if let (Some(acc), Some(row)) = (d.accelerometer(), sums.last_mut()) {
-            let t = accelerometer_term(s, &acc);
+            let per_t = C::new(1.0, 0.0).div(accelerometer_term(s, &acc));
             for (j, sum) in row.iter_mut().enumerate().take(4) {
                 let (df, dz, _) = mv(j, acc_tol);
                 let moved = Accelerometer {
@@ -458,21 +449,12 @@ fn shifts_at(
                 };
                 add(
                     sum,
-                    accelerometer_term(s, &moved).div(t).sub(C::new(1.0, 0.0)),
+                    accelerometer_term(s, &moved)
+                        .mul(per_t)
+                        .sub(C::new(1.0, 0.0)),
                 );
             }
         }
     }
     sums
-}
-
-/// The window's weight at `v = w t_c` for the window `[a, b] t_c`: `(e^(j v b) - e^(j v a)) / (j v)`
-/// (`b - a` at `v = 0`), the conjugate of its spectrum over `t_c`.
-fn window_term(v: f32, a: f32, b: f32) -> C {
-    if v == 0.0 {
-        return C::new(b - a, 0.0);
-    }
-    let (sb, cb) = math::sin_cos_any(v * b);
-    let (sa, ca) = math::sin_cos_any(v * a);
-    C::new((sb - sa) / v, -(cb - ca) / v)
 }

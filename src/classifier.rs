@@ -1,7 +1,7 @@
 //! From a measured pulse `(F_max, t_c)` to a verdict against the scene's class envelopes.
 
 use crate::chain_bias::ChainSpread;
-use crate::envelope::{Envelope, Inverted, NoiseXy, Side};
+use crate::envelope::{Envelope, HERTZ_SLOPES, Inverted, NoiseXy, Side};
 use crate::math::Backend;
 use crate::scene::Scene;
 
@@ -339,8 +339,7 @@ impl<const N: usize, M: Backend> Scene<N, M> {
         let cov = finite_or(m.cov_ln).max(-(sf * st)).min(sf * st);
         let noise = NoiseXy::new::<M>(sf, st, cov);
         let chain = self.chain_bias().spread(lt);
-        let (wf, wt, wc) = chain.widen::<M>((sf, st, cov));
-        let wide = NoiseXy::new::<M>(wf, wt, wc);
+        let wide = noise.with_chain::<M>(&chain, HERTZ_SLOPES);
         PulsePoint {
             lf,
             lt,

@@ -101,6 +101,13 @@ pub struct Envelope {
     pub ratio_map: Option<RatioMap>,
 }
 
+/// How `(x, y) = (ln R, ln u)` move with `(ln F_max, ln t_c)`: `((dx/dA, dx/dB), (dy/dA,
+/// dy/dB))`.
+pub type Slopes = ((f32, f32), (f32, f32));
+
+/// Hertz's [`Slopes`]: `x = ln F / 8 + 3 ln t / 4 + k`, `y = 5 ln F / 8 - 5 ln t / 4 + k`.
+pub const HERTZ_SLOPES: Slopes = ((0.125, 0.75), (0.625, -1.25));
+
 /// Measurement noise carried from `(ln F_max, ln t_c)`, with standard deviations `sF`, `sT`
 /// and covariance `c`, into `(x, y) = (ln R, ln u)` as the standard deviations of its two
 /// marginals: `sigma_x^2 = sF^2 / 64 + 9 sT^2 / 16 + 3 c / 16`,
@@ -159,6 +166,41 @@ impl NoiseXy {
         Self {
             sigma_x: clamp_sigma(M::sqrt(var(l.dx))),
             sigma_y: clamp_sigma(M::sqrt(var(l.dy))),
+        }
+    }
+
+    /// This noise widened by a chain's spread `s` ([`ChainSpread`]: second moments of
+    /// `(ln F_max, ln t_c)`), carried by the slopes `(dx, dy)` of `(x, y)` in `(ln F_max,
+    /// ln t_c)` ([`HERTZ_SLOPES`] or a bent class's [`Local`]) and added to each variance:
+    /// `sigma_x^2 + dx_A^2 vF + dx_B^2 vT + 2 dx_A dx_B cFT` (likewise `y`), at most
+    /// [`MAX_SIGMA`].
+    ///
+    /// ```
+    /// use coalshock::chain_bias::ChainSpread;
+    /// use coalshock::envelope::{HERTZ_SLOPES, NoiseXy};
+    /// use coalshock::math::Libm as M;
+    /// // A bias b of ln F_max with -b of ln t_c moves (ln R, ln u) by (-5/8 b, 15/8 b).
+    /// let b2 = 1e-4;
+    /// let s = ChainSpread { var_ln_force: b2, var_ln_duration: b2, cov_ln: -b2 };
+    /// let n = NoiseXy { sigma_x: 1e-4, sigma_y: 1e-4 }.with_chain::<M>(&s, HERTZ_SLOPES);
+    /// assert!((n.sigma_x - (1e-8f32 + 0.390625 * b2).sqrt()).abs() < 1e-6);
+    /// assert!((n.sigma_y - (1e-8f32 + 3.515625 * b2).sqrt()).abs() < 1e-6);
+    /// ```
+    pub fn with_chain<M: Backend>(self, s: &ChainSpread, (dx, dy): Slopes) -> Self {
+        if *s == ChainSpread::ZERO {
+            return self;
+        }
+        let var = |sigma: f32, (ca, cb): (f32, f32)| {
+            sigma * sigma
+                + ca * ca * s.var_ln_force
+                + cb * cb * s.var_ln_duration
+                + 2.0 * ca * cb * s.cov_ln
+        };
+        // A spread's second moments are positive semi-definite: each variance only grows, and
+        // stays at least `MIN_SIGMA^2`.
+        Self {
+            sigma_x: M::sqrt(var(self.sigma_x, dx)).min(MAX_SIGMA),
+            sigma_y: M::sqrt(var(self.sigma_y, dy)).min(MAX_SIGMA),
         }
     }
 }
@@ -307,7 +349,7 @@ impl Envelope {
 
     /// The measurement noise `(sigma_ln_force, sigma_ln_duration, cov_ln)` carried into this bent
     /// class's `(ln R, ln u)` at the point `(ln_force, ln_duration)` maps to, and the same
-    /// widened by a chain's spread `chain` ([`NoiseXy::through`], [`ChainSpread::widen`]);
+    /// widened by a chain's spread `chain` ([`NoiseXy::through`], [`NoiseXy::with_chain`]);
     /// `None` for a Hertz envelope (the caller's [`NoiseXy::new`] holds).
     #[inline(never)]
     pub fn bent_noise<M: Backend>(
@@ -321,8 +363,7 @@ impl Envelope {
         let b = ln_duration - self.ln_duration_coeff;
         let l = map.local(map.invert(a, b).2);
         let noise = NoiseXy::through::<M>(sigma_ln_force, sigma_ln_duration, cov_ln, l);
-        let (wf, wt, wc) = chain.widen::<M>((sigma_ln_force, sigma_ln_duration, cov_ln));
-        Some((noise, NoiseXy::through::<M>(wf, wt, wc, l)))
+        Some((noise, noise.with_chain::<M>(chain, (l.dx, l.dy))))
     }
 
     /// `(ln F_max, ln t_c)` of radius `e^x` m and speed `e^y` m/s; a bent class adds
