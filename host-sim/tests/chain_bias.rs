@@ -15,29 +15,38 @@ use host_sim::scene::SensorSpec;
 const FS: f64 = 100_000.0;
 const PEAK_COUNTS: f64 = 20_000.0;
 
+/// Start of the test pulse (s).
+const START_S: f64 = 0.002;
+
+/// The pulse of `duration_s` through the chain `truth`, equalised for the chain `believed`
+/// (6 ms of samples), the index of its largest sample and its peak from a parabola through
+/// the top three samples.
+fn equalised_top(
+    truth: &SensorSpec,
+    believed: &SensorSpec,
+    duration_s: f64,
+) -> (Vec<f64>, usize, f64) {
+    let n = (0.006 * FS) as usize;
+    let (out, _) =
+        common::equalised_hertz_pulse(truth, believed, (START_S, duration_s, PEAK_COUNTS), n);
+    let out: Vec<f64> = out.iter().map(|&v| v as f64).collect();
+    let i = (1..n - 1).fold(1, |b, i| if out[i] > out[b] { i } else { b });
+    let (a, b, c) = (out[i - 1], out[i], out[i + 1]);
+    let peak = b + 0.125 * (a - c) * (a - c) / (2.0 * b - a - c);
+    (out, i, peak)
+}
+
 /// Peak and area (counts, counts s) of the pulse of `duration_s` through the chain `truth`,
-/// equalised for the chain `believed`; the peak from a parabola through the top three samples.
+/// equalised for the chain `believed` ([`equalised_top`]).
 fn equalised_peak_and_area(
     truth: &SensorSpec,
     believed: &SensorSpec,
     duration_s: f64,
 ) -> (f64, f64) {
-    let start_s = 0.002;
-    let n = (0.006 * FS) as usize;
-    let (out, _) =
-        common::equalised_hertz_pulse(truth, believed, (start_s, duration_s, PEAK_COUNTS), n);
-    let out: Vec<f64> = out.iter().map(|&v| v as f64).collect();
-    let (i, _) = out
-        .iter()
-        .enumerate()
-        .skip(1)
-        .take(n - 2)
-        .fold((1, f64::MIN), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
-    let (a, b, c) = (out[i - 1], out[i], out[i + 1]);
-    let peak = b + 0.125 * (a - c) * (a - c) / (2.0 * b - a - c);
+    let (out, _, peak) = equalised_top(truth, believed, duration_s);
     // The pulse and its accelerometer ring-down, not the slow modes' ringing after it.
-    let lo = ((start_s - 2e-4) * FS) as usize;
-    let hi = ((start_s + duration_s + 2e-4) * FS) as usize;
+    let lo = ((START_S - 2e-4) * FS) as usize;
+    let hi = ((START_S + duration_s + 2e-4) * FS) as usize;
     (peak, out[lo..hi].iter().sum::<f64>() / FS)
 }
 
@@ -139,13 +148,7 @@ fn beam_mode_gains_move_the_peak_as_bounded() {
 /// [`coalshock::pulse_window::PRE_TRIGGER`] samples before it and the hold after it, about
 /// the largest sample) over `C_AREA F_max`, up to a constant.
 fn windowed_ln(truth: &SensorSpec, believed: &SensorSpec, duration_s: f64) -> (f64, f64) {
-    let n = (0.006 * FS) as usize;
-    let (out, _) =
-        common::equalised_hertz_pulse(truth, believed, (0.002, duration_s, PEAK_COUNTS), n);
-    let out: Vec<f64> = out.iter().map(|&v| v as f64).collect();
-    let i = (1..n - 1).fold(1, |b, i| if out[i] > out[b] { i } else { b });
-    let (a, b, c) = (out[i - 1], out[i], out[i + 1]);
-    let peak = b + 0.125 * (a - c) * (a - c) / (2.0 * b - a - c);
+    let (out, i, peak) = equalised_top(truth, believed, duration_s);
     let half = 0.5 * duration_s * FS;
     let hold = coalshock::pulse_window::hold_samples(2, duration_s as f32, FS as f32) as f64;
     let lo = (i as f64 - half - coalshock::pulse_window::PRE_TRIGGER as f64).round() as usize;
