@@ -210,7 +210,8 @@ impl ChainSpread {
         cov_ln: 0.0,
     };
 
-    /// The standard deviation of `d ln F_max`.
+    /// The standard deviation of `d ln F_max`, `sqrt(var_ln_force)`, by the kernel's default
+    /// math backend ([`math::DefaultBackend`]).
     ///
     /// ```
     /// use coalshock::chain_bias::ChainSpread;
@@ -218,7 +219,7 @@ impl ChainSpread {
     /// assert!((s.sigma_ln_force() - 0.02).abs() < 1e-7);
     /// ```
     pub fn sigma_ln_force(&self) -> f32 {
-        libm::sqrtf(self.var_ln_force.max(0.0))
+        math::DefaultBackend::sqrt(self.var_ln_force.max(0.0))
     }
 }
 
@@ -350,7 +351,7 @@ fn mv(k: usize, tol: ChainTolerance) -> (f32, f32, f32) {
 
 /// A move's first-order shifts `(d ln F_max, d ln A)` (peak, and the sum over the window),
 /// accumulated over the integral's points.
-type Shift = [[(f32, f32); MOVES]; crate::equaliser::MAX_MODES + 1];
+type Shifts = [[(f32, f32); MOVES]; crate::equaliser::MAX_MODES + 1];
 
 /// The [`ChainSpread`] for one pulse duration `t_c` (s) whose sum spans `window_samples`
 /// samples beyond the contact: the module's integrals for every stage and move, each move's
@@ -386,7 +387,7 @@ fn shifts_at(
     sample_rate_hz: f32,
     t_c: f32,
     (before, after): (f32, f32),
-) -> Shift {
+) -> Shifts {
     let (tol, acc_tol) = (d.tolerance(), d.accelerometer_tolerance());
     let v_top = (core::f32::consts::PI * sample_rate_hz * t_c).min(MAX_V);
     let samples = sample_rate_hz * t_c;
@@ -395,7 +396,7 @@ fn shifts_at(
     let (turn_a, turn_b) = (cis(STEP_V * a), cis(STEP_V * b));
     let (mut at_a, mut at_b) = (C::new(1.0, 0.0), C::new(1.0, 0.0));
     // [stage][move]: modes, then the accelerometer.
-    let mut sums: Shift = [[(0.0, 0.0); MOVES]; crate::equaliser::MAX_MODES + 1];
+    let mut sums: Shifts = [[(0.0, 0.0); MOVES]; crate::equaliser::MAX_MODES + 1];
     for (k, &weight) in HERTZ_SPECTRUM.iter().enumerate() {
         let v = k as f32 * STEP_V;
         if v > v_top {

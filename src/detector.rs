@@ -1526,7 +1526,9 @@ impl<M: Backend> Detector<M> {
         let samples = p.samples as f32;
         // The second-order corrections on a rigid chain only (see the module's docs).
         #[cfg(feature = "second_order")]
-        let sum = if self.rigid() {
+        let rigid = self.rigid();
+        #[cfg(feature = "second_order")]
+        let sum = if rigid {
             self.unbiased_sum(samples)
         } else {
             p.sum
@@ -1560,7 +1562,7 @@ impl<M: Backend> Detector<M> {
             fit
         };
         #[cfg(feature = "second_order")]
-        let fit = if self.rigid() {
+        let fit = if rigid {
             unbiased_vertex(fit, self.noise)
         } else {
             fit
