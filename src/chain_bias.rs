@@ -25,13 +25,19 @@
 //! area kept, `d ln t_c = -d ln F_max`, a beam mode's gain stated a spread of `ln u` three times
 //! what it does, and posteriors behind a chain given right were under-confident by 12 pp.)
 //!
-//! Each parameter of each stage (frequency, damping, and a beam mode's gain) is moved by
-//! `+-` its relative tolerance alone (the accelerometer's own, when the chain states one:
-//! [`ChainDynamics::accelerometer_tolerance`]), giving the shifts `b_+` and `b_-` of
-//! `(ln F_max, ln t_c)`. Each parameter's error is taken as uniform within its tolerance and
-//! independent of the others, and the shift as linear in it on either side, so the second
-//! moments are `sum_i (b_+ b_+^T + b_- b_-^T) / 6` ([`ChainSpread`]): that is what the
-//! classifier adds to the pulse's noise. (The sum of the worst shifts, the worst corner, made
+//! A tolerance `tol` is the given value's relative error: the given value is the truth's times
+//! `1 + e`, `e` uniform within `+-tol` and independent of the others (as `host-sim evaluate
+//! --chain-drawn` draws it). The truth is then the given's times `1 + x`, `x = -e / (1 + e)`
+//! from `-tol / (1 + tol)` to `tol / (1 - tol)`: a damping known to 30 % may truly be 43 % above
+//! the value given, or 23 % below. Each parameter of each stage (frequency, damping, and a
+//! beam mode's gain) is moved alone to either end (the accelerometer's own tolerance, when the
+//! chain states one: [`ChainDynamics::accelerometer_tolerance`]), giving the shifts `b_+` and
+//! `b_-` of `(ln F_max, ln t_c)`. The shift is taken as linear in `x` on either side, so the
+//! second moments are `sum_i (w_+ b_+ b_+^T + w_- b_- b_-^T)` ([`ChainSpread`], the weights
+//! [`side_weight`]; `1/6` each for a small tolerance): that is what the classifier adds to
+//! the pulse's noise. (Moved by `+-tol` about the given value, the frame taken before, a
+//! damping 30 % low stated two thirds of the shift it leaves in `ln F_max`, and `mems_chain`
+//! with drawn chains put 0.50-0.71 % of its errors beyond three stated sigmas.) (The sum of the worst shifts, the worst corner, made
 //! posteriors on the scene's own chain far less sure than they are: a 0.85 stated where 0.99
 //! held.) It is tabulated at [`POINTS`] durations spaced evenly in `ln t_c` over the scene's
 //! pulses, at build, and interpolated per pulse. The integrals are trapezoid rules in
@@ -336,17 +342,64 @@ pub(crate) fn chain_term(s: C, d: &ChainDynamics) -> C {
     }
 }
 
-/// The three relative moves of a stage's parameters, each alone, with both signs.
+/// The three relative moves of a stage's parameters, each alone, to both ends of its
+/// tolerance.
 const MOVES: usize = 6;
 
-/// `(d frequency, d damping, d gain)` relative, of move `k`.
-fn mv(k: usize, tol: ChainTolerance) -> (f32, f32, f32) {
+/// Move `k`'s parameter (0 frequency, 1 damping, 2 gain) and the signed end `t` of the given
+/// value's error `e = -t`: `+tol` for the even moves, `-tol` for the odd.
+fn signed_tolerance(k: usize, tol: ChainTolerance) -> (usize, f32) {
     let sign = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
-    match k / 2 {
-        0 => (sign * tol.frequency, 0.0, 0.0),
-        1 => (0.0, sign * tol.damping, 0.0),
-        _ => (0.0, 0.0, sign * tol.gain),
+    let t = match k / 2 {
+        0 => tol.frequency,
+        1 => tol.damping,
+        _ => tol.gain,
+    };
+    (k / 2, sign * t)
+}
+
+/// `(d frequency, d damping, d gain)` relative, of move `k`: the truth at the end of the
+/// tolerance on the move's side. The given value is the truth's times `1 + e`, so the truth is
+/// the given's times `1 + x`, `x = t / (1 - t)` for `e = -t`.
+fn mv(k: usize, tol: ChainTolerance) -> (f32, f32, f32) {
+    let (parameter, t) = signed_tolerance(k, tol);
+    let x = t / (1.0 - t);
+    match parameter {
+        0 => (x, 0.0, 0.0),
+        1 => (0.0, x, 0.0),
+        _ => (0.0, 0.0, x),
     }
+}
+
+/// Terms of the series of [`side_weight`]: `(n + 1) |t|^n / (n + 3)` at `n` = 32 and
+/// `|t| < 0.5` is below `1e-10`.
+const SERIES_TERMS: u8 = 32;
+
+/// The weight of a move's shift `b` at its end in the second moment, `E[b^2] = w b^2` over its
+/// side: the given value is the truth's times `1 + e`, `e` uniform within `+-tol`, so the
+/// truth is the given's times `1 + x` with `x = -e / (1 + e)`; the shift is taken linear in
+/// `x`, and the side's end is `x(t) = t / (1 - t)` at `t = -e = +-tol`. Then `w = int_0^t x^2
+/// du / (2 t x(t)^2) = (1 - t)^2 / 2 sum_{n >= 0} (n + 1) t^n / (n + 3)`: 1/6 as `t -> 0`,
+/// 0.1381 at `t = 0.3`, 0.1995 at `t = -0.3`.
+///
+/// ```
+/// # use coalshock::chain_bias::side_weight;
+/// assert!((side_weight(0.0) - 1.0 / 6.0).abs() < 1e-7);
+/// // int_0^0.3 (u / (1 - u))^2 du = 1 / 0.7 + 2 ln 0.7 - 0.7, over 2 (0.3) (0.3 / 0.7)^2.
+/// let closed = (1.0 / 0.7 + 2.0 * 0.7f64.ln() - 0.7) / (0.6 * (0.3f64 / 0.7).powi(2));
+/// assert!((side_weight(0.3) as f64 - closed).abs() < 1e-6);
+/// // int_0^0.3 (u / (1 + u))^2 du = 1.3 - 2 ln 1.3 - 1 / 1.3, over 2 (0.3) (0.3 / 1.3)^2.
+/// let closed = (1.3 - 2.0 * 1.3f64.ln() - 1.0 / 1.3) / (0.6 * (0.3f64 / 1.3).powi(2));
+/// assert!((side_weight(-0.3) as f64 - closed).abs() < 1e-6);
+/// ```
+pub fn side_weight(t: f32) -> f32 {
+    let (mut sum, mut power) = (0.0, 1.0);
+    for n in 0..SERIES_TERMS {
+        let n = f32::from(n);
+        sum += (n + 1.0) * power / (n + 3.0);
+        power *= t;
+    }
+    0.5 * (1.0 - t) * (1.0 - t) * sum
 }
 
 /// A move's first-order shifts `(d ln F_max, d ln A)` (peak, and the sum over the window),
@@ -355,9 +408,9 @@ type Shifts = [[(f32, f32); MOVES]; crate::equaliser::MAX_MODES + 1];
 
 /// The [`ChainSpread`] for one pulse duration `t_c` (s) whose sum spans `window_samples`
 /// samples beyond the contact: the module's integrals for every stage and move, each move's
-/// `(d ln F_max, d ln t_c = d ln A - d ln F_max)` taken as the shift at its parameter's
-/// tolerance, the error uniform within it (`E[b b^T] = (b_+ b_+^T + b_- b_-^T) / 6` of the two
-/// signs' shifts), summed over parameters.
+/// `(d ln F_max, d ln t_c = d ln A - d ln F_max)` taken as the shift at its side's end of the
+/// tolerance, the error uniform within it (`E[b b^T] = w_+ b_+ b_+^T + w_- b_- b_-^T` of the
+/// two sides' shifts, [`side_weight`]), summed over parameters.
 // Not inlined: a rigid scene's build never calls it and must not carry its frame.
 #[inline(never)]
 fn spread_at(
@@ -367,12 +420,22 @@ fn spread_at(
     window_samples: (f32, f32),
 ) -> ChainSpread {
     let shifts = shifts_at(d, sample_rate_hz, t_c, window_samples);
+    let weights =
+        |tol| core::array::from_fn::<f32, MOVES, _>(|k| side_weight(signed_tolerance(k, tol).1));
+    let (beam, acc) = (weights(d.tolerance()), weights(d.accelerometer_tolerance()));
     let mut s = ChainSpread::ZERO;
-    for &(df, da) in shifts.iter().flatten() {
-        let dt = da - df;
-        s.var_ln_force += df * df / 6.0;
-        s.var_ln_duration += dt * dt / 6.0;
-        s.cov_ln += df * dt / 6.0;
+    for (stage, row) in shifts.iter().enumerate() {
+        let w = if stage < crate::equaliser::MAX_MODES {
+            &beam
+        } else {
+            &acc
+        };
+        for (&(df, da), &w) in row.iter().zip(w) {
+            let dt = da - df;
+            s.var_ln_force += w * df * df;
+            s.var_ln_duration += w * dt * dt;
+            s.cov_ln += w * df * dt;
+        }
     }
     let finite =
         s.var_ln_force.is_finite() && s.var_ln_duration.is_finite() && s.cov_ln.is_finite();
@@ -441,6 +504,9 @@ fn shifts_at(
             }
         }
         if let (Some(acc), Some(row)) = (d.accelerometer(), sums.last_mut()) {
+            // A resonance wider than the step is taken on the axis.
+            let width = acc.damping_ratio * 2.0 * core::f32::consts::PI * acc.frequency_hz * t_c;
+            let s = if width > STEP_V { C::new(0.0, s.im) } else { s };
             let per_t = C::new(1.0, 0.0).div(accelerometer_term(s, &acc));
             for (j, sum) in row.iter_mut().enumerate().take(4) {
                 let (df, dz, _) = mv(j, acc_tol);

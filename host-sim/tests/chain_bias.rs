@@ -157,22 +157,29 @@ fn windowed_ln(truth: &SensorSpec, believed: &SensorSpec, duration_s: f64) -> (f
     (peak.ln(), (area / peak).ln())
 }
 
-/// The second moments of `(d ln F_max, d ln t_c)` over one parameter's error uniform within
-/// `+-step`, measured at the two ends: `(b_+ b_+^T + b_- b_-^T) / 6`.
+/// Points of the midpoint rule over a parameter's error in [`measured_moments`].
+const ERROR_POINTS: usize = 16;
+
+/// The second moments of `(d ln F_max, d ln t_c)` over one parameter's error: the given
+/// (believed) value the truth's times `1 + e`, `e` uniform within `+-tolerance` (the frame of a
+/// stated tolerance and of `host-sim evaluate --chain-drawn`), by the midpoint rule over
+/// [`ERROR_POINTS`] points; `moved(r)` is the believed chain with the parameter times `1 + r`,
+/// here the truth, `r = 1 / (1 + e) - 1`.
 fn measured_moments(
     believed: &SensorSpec,
     moved: impl Fn(f64) -> SensorSpec,
-    step: f64,
+    tolerance: f64,
     duration_s: f64,
 ) -> [f64; 3] {
     let (f0, t0) = windowed_ln(believed, believed, duration_s);
     let mut m = [0.0; 3];
-    for sign in [1.0, -1.0] {
-        let (f, t) = windowed_ln(&moved(sign * step), believed, duration_s);
+    for i in 0..ERROR_POINTS {
+        let e = tolerance * (2.0 * (i as f64 + 0.5) / ERROR_POINTS as f64 - 1.0);
+        let (f, t) = windowed_ln(&moved(1.0 / (1.0 + e) - 1.0), believed, duration_s);
         let (df, dt) = (f - f0, t - t0);
-        m[0] += df * df / 6.0;
-        m[1] += dt * dt / 6.0;
-        m[2] += df * dt / 6.0;
+        m[0] += df * df / ERROR_POINTS as f64;
+        m[1] += dt * dt / ERROR_POINTS as f64;
+        m[2] += df * dt / ERROR_POINTS as f64;
     }
     m
 }
