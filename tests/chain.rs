@@ -432,12 +432,15 @@ fn a_chain_scene_corrects_its_equalisers_residual_and_a_rigid_one_does_not() {
 /// the ringing's crests whole and its troughs only down to the trigger, so that `ln t_c` read
 /// up to 0.1 low; and the spread was stated as 1.5 times the amplitude, uncorrelated.
 ///
-/// Behind several modes the node does not know which ring, and states the spread of the one
-/// that moves `ln t_c` most: never less than the ringing leaves, up to 4 times more for
-/// 2.1 kHz ringing behind three modes (printed). Matching the modes' mix to the quiet
-/// signal's mean square of its first difference got each of these within 5 %, but in the
-/// chain scenes' streams, with every chain drawn within its tolerance, it stated less than
-/// the ringing there leaves: 2.7-3.7 % confident errors on `mems_chain` against 0.2 %.
+/// Behind several modes the node does not know which ring, and averages the spread over a
+/// uniform prior on their mix, each of `M` modes' `D^2` weighed `1 / M`: it states at least
+/// `1 / sqrt(M)` of what the ringing leaves in `ln t_c` (all of it at the mode of the largest
+/// `D`), and more for a fast mode's ringing, which the window averages out (printed). The
+/// spread of the mode that moves `ln t_c` most, stated before, was never less, but about
+/// twice as wide as the drawn chains' ringing in the chain scenes' streams; matching the
+/// modes' mix to the quiet signal's mean square of its first difference got each of these
+/// within 5 %, but there stated less than the ringing leaves: 2.7-3.7 % confident errors on
+/// `mems_chain` against 0.2 %.
 #[test]
 fn ringing_before_a_pulse_reads_unbiased_with_the_spread_it_states() {
     let beam = [
@@ -451,6 +454,7 @@ fn ringing_before_a_pulse_reads_unbiased_with_the_spread_it_states() {
     for rings in [
         &[(2100.0, 100.0)][..],
         &[(650.0, 100.0)],
+        &[(180.0, 100.0)],
         &[(180.0, 70.7), (2100.0, 70.7)],
     ] {
         ringing_case(&beam, rings);
@@ -532,17 +536,18 @@ fn ringing_case(modes: &[BeamMode], rings: &[(f64, f64)]) {
             "{label}: {e}"
         );
     }
-    // The stated spread within a quarter of the Monte Carlo's at a lone mode; behind several,
-    // not below it (the peak's spread is the ringing's amplitude whatever its frequency).
+    // The stated spread within a quarter of the Monte Carlo's at a lone mode and for the peak
+    // (the ringing's amplitude whatever its frequency); behind `M` modes, `ln t_c`'s not below
+    // `1 / sqrt(M)` of it.
     let alone = modes.len() == 1;
     for (mc, st, of_peak) in [(vf, stated[0], true), (vt, stated[1], false)] {
         let r = (st / mc).sqrt();
-        let top = if alone || of_peak {
-            1.25
+        let (low, top) = if alone || of_peak {
+            (0.8, 1.25)
         } else {
-            f64::INFINITY
+            (0.8 / (modes.len() as f64).sqrt(), f64::INFINITY)
         };
-        assert!((0.8..top).contains(&r), "{label}: stated / observed {r}");
+        assert!((low..top).contains(&r), "{label}: stated / observed {r}");
     }
     if alone {
         assert!(
