@@ -1289,8 +1289,11 @@ impl<M: Backend> Detector<M> {
             p.excess = M::sqrt(ms - noise2);
         }
         // Behind a chain, the quiet signal's longer memory sees ringing below that, and
-        // averages more of its phase.
-        if self.ring_weight > 0.0 {
+        // averages more of its phase, once the oldest half is above the noise too (by two
+        // standard deviations of 16 white samples' mean square, `sqrt(2 / 16)`): the tracked
+        // mean square alone also rose on the coloured noise and pulse tails behind a MEMS band
+        // known exactly.
+        if self.ring_weight > 0.0 && old >= 4 && ms > 1.7 * noise2 {
             let (tracked, w) = (self.ring_ms(), self.ring_weight);
             if tracked > noise2 * (1.0 + RING_TRACK_SIGMAS * M::sqrt(2.0 * w / (2.0 - w))) {
                 p.excess = M::sqrt(tracked - noise2);
