@@ -1282,22 +1282,27 @@ impl<M: Backend> Detector<M> {
                 old_sq += w * w;
             }
         }
-        // Ringing before the pulse, well above the noise (16 samples of noise alone exceed
-        // 3 noise^2 in mean square with probability 1e-5).
+        // Ringing before the pulse: its oldest half above the noise (by two standard
+        // deviations of 16 white samples' mean square, `sqrt(2 / 16)`), and either, behind a
+        // chain, the quiet signal's longer memory above it ([`RING_TRACK_SIGMAS`]: it sees
+        // ringing below the next test and averages more of its phase, but alone it rose on the
+        // coloured noise and pulse tails behind a MEMS band known exactly), or the oldest half
+        // well above it (16 samples of noise alone exceed 3 noise^2 in mean square with
+        // probability 1e-5).
         let (ms, noise2) = (old_sq / old.max(1) as f32, self.noise * self.noise);
-        if old >= 4 && ms > 3.0 * noise2 {
-            p.excess = M::sqrt(ms - noise2);
-        }
-        // Behind a chain, the quiet signal's longer memory sees ringing below that, and
-        // averages more of its phase, once the oldest half is above the noise too (by two
-        // standard deviations of 16 white samples' mean square, `sqrt(2 / 16)`): the tracked
-        // mean square alone also rose on the coloured noise and pulse tails behind a MEMS band
-        // known exactly.
-        if self.ring_weight > 0.0 && old >= 4 && ms > 1.7 * noise2 {
-            let (tracked, w) = (self.ring_ms(), self.ring_weight);
-            if tracked > noise2 * (1.0 + RING_TRACK_SIGMAS * M::sqrt(2.0 * w / (2.0 - w))) {
-                p.excess = M::sqrt(tracked - noise2);
-            }
+        if old >= 4 && ms > 1.7 * noise2 {
+            let w = self.ring_weight;
+            let level = if w > 0.0
+                && self.ring_ms()
+                    > noise2 * (1.0 + RING_TRACK_SIGMAS * M::sqrt(2.0 * w / (2.0 - w)))
+            {
+                self.ring_ms()
+            } else if ms > 3.0 * noise2 {
+                ms
+            } else {
+                noise2
+            };
+            p.excess = M::sqrt(level - noise2);
         }
         p.after_gap = after_gap;
         self.pulse = p;
